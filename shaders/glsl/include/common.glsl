@@ -1,0 +1,14 @@
+// Shared declarations for every cogeo compute pass. All buffers are reached through buffer device
+// addresses, so no pass is bound by a driver's per-binding storage-buffer limit (128 MiB on lavapipe).
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference2 : require
+#extension GL_EXT_scalar_block_layout : require
+
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Floats { float v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Uints { uint v[]; };
+
+// Dispatches over more than 65535 workgroups are split into a 2D grid by the host (gpu::dispatch_1d);
+// this linearizes the workgroup id again.
+uint linear_group_id() {
+    return gl_WorkGroupID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x;
+}

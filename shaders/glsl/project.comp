@@ -1,0 +1,109 @@
+#version 460
+// Projection + SH evaluation, one thread per Gaussian: view-space depth, 2D mean, conic with the 0.3
+// low-pass dilation, activated opacity, SH color, conservative tile rectangle and the exact number of
+// tiles the Gaussian touches (counted with the same test the emit pass uses). Also writes the depth
+// sort key. Conventions: shared/docs/conventions.md.
+#include "common.glsl"
+#include "render_params.glsl"
+#include "sh.glsl"
+#include "tile_binning.glsl"
+
+layout(local_size_x = 256) in;
+layout(push_constant) uniform Push { RenderParams p; };
+
+void cull(uint g) {
+    p.tiles_touched.v[g] = 0;
+    p.depth_keys.v[g] = 0x7fffffffu;
+    p.depth.v[g] = 0.0;
+    for (int i = 0; i < 4; i++) p.tile_rect.v[4 * g + i] = 0;
+}
+
+void main() {
+    uint g = linear_group_id() * 256 + gl_LocalInvocationID.x;
+    if (g >= p.num_gaussians) return;
+    p.depth_order.v[g] = g;  // identity values for the depth sort
+
+    vec3 m = vec3(p.means.v[3 * g], p.means.v[3 * g + 1], p.means.v[3 * g + 2]);
+    mat3 R_view = mat3(p.viewmat[0], p.viewmat[4], p.viewmat[8],   // column-major: columns of R
+                       p.viewmat[1], p.viewmat[5], p.viewmat[9],
+                       p.viewmat[2], p.viewmat[6], p.viewmat[10]);
+    vec3 t_view = vec3(p.viewmat[3], p.viewmat[7], p.viewmat[11]);
+    vec3 pv = R_view * m + t_view;
+    if (!(pv.z > p.near_plane)) { cull(g); return; }
+
+    // 3D covariance R S S^T R^T from the normalized quaternion and exp(log scale)
+    vec4 q = vec4(p.quats.v[4 * g], p.quats.v[4 * g + 1], p.quats.v[4 * g + 2], p.quats.v[4 * g + 3]);
+    q = q / length(q);
+    float w = q.x, x = q.y, y = q.z, z = q.w;
+    mat3 Rq = mat3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y),
+                   2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x),
+                   2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y));
+    vec3 s = exp(vec3(p.log_scales.v[3 * g], p.log_scales.v[3 * g + 1], p.log_scales.v[3 * g + 2]));
+    mat3 M = Rq * mat3(s.x, 0, 0, 0, s.y, 0, 0, 0, s.z);
+    mat3 cov_world = M * transpose(M);
+    mat3 cov_view = R_view * cov_world * transpose(R_view);
+
+    // perspective Jacobian with x/z, y/z clamped to 1.3 tan(fov/2)
+    float lim_x = 1.3 * p.tan_fovx, lim_y = 1.3 * p.tan_fovy;
+    float tx = clamp(pv.x / pv.z, -lim_x, lim_x) * pv.z;
+    float ty = clamp(pv.y / pv.z, -lim_y, lim_y) * pv.z;
+    float rz = 1.0 / pv.z;
+    // J is 2x3; written as the columns of a mat3x2 (3 columns, 2 rows)
+    mat3x2 J = mat3x2(p.fx * rz, 0.0, 0.0, p.fy * rz, -p.fx * tx * rz * rz, -p.fy * ty * rz * rz);
+    mat2 cov2d = J * cov_view * transpose(J);
+    cov2d[0][0] += 0.3;
+    cov2d[1][1] += 0.3;
+    float det = cov2d[0][0] * cov2d[1][1] - cov2d[0][1] * cov2d[1][0];
+    if (!(det > 0.0)) { cull(g); return; }
+    vec3 conic = vec3(cov2d[1][1], -cov2d[0][1], cov2d[0][0]) / det;
+    vec2 xy = vec2(p.fx * pv.x * rz + p.cx, p.fy * pv.y * rz + p.cy);
+    float opacity = 1.0 / (1.0 + exp(-p.opacity_logits.v[g]));
+
+    // conservative pixel-center bounding box of the ellipse, then the exact per-tile test
+    float threshold = binning_q_threshold(opacity);
+    uint touched = 0;
+    uvec4 rect = uvec4(0);
+    if (threshold >= 0.0) {
+        float rx = sqrt(threshold * cov2d[0][0]) * 1.001 + 1.0;
+        float ry = sqrt(threshold * cov2d[1][1]) * 1.001 + 1.0;
+        // pixels whose centers (px + 0.5) lie within [xy - r, xy + r]
+        float fx0 = ceil(xy.x - rx - 0.5), fx1 = floor(xy.x + rx - 0.5);
+        float fy0 = ceil(xy.y - ry - 0.5), fy1 = floor(xy.y + ry - 0.5);
+        fx0 = max(fx0, 0.0); fy0 = max(fy0, 0.0);
+        fx1 = min(fx1, float(p.width) - 1.0); fy1 = min(fy1, float(p.height) - 1.0);
+        if (fx0 <= fx1 && fy0 <= fy1) {
+            rect = uvec4(uint(fx0) / TILE, uint(fy0) / TILE, uint(fx1) / TILE + 1, uint(fy1) / TILE + 1);
+            for (uint ty_ = rect.y; ty_ < rect.w; ty_++)
+                for (uint tx_ = rect.x; tx_ < rect.z; tx_++)
+                    if (gaussian_touches_tile(xy, conic, threshold, tx_, ty_, p.width, p.height)) touched++;
+        }
+    }
+    if (touched == 0) rect = uvec4(0);
+
+    // view-dependent color
+    vec3 dir = normalize(m - vec3(p.campos[0], p.campos[1], p.campos[2]));
+    float basis[16];
+    sh_basis(dir, p.sh_degree, basis);
+    uint K = p.sh_coeffs;
+    uint nb = min((p.sh_degree + 1) * (p.sh_degree + 1), K);
+    vec3 color = vec3(0.0);
+    for (uint k = 0; k < nb; k++) {
+        uint base = (g * K + k) * 3;
+        color += basis[k] * vec3(p.sh.v[base], p.sh.v[base + 1], p.sh.v[base + 2]);
+    }
+    color = max(color + 0.5, vec3(0.0));
+
+    p.xy.v[2 * g] = xy.x;
+    p.xy.v[2 * g + 1] = xy.y;
+    p.conic_opacity.v[4 * g] = conic.x;
+    p.conic_opacity.v[4 * g + 1] = conic.y;
+    p.conic_opacity.v[4 * g + 2] = conic.z;
+    p.conic_opacity.v[4 * g + 3] = opacity;
+    p.depth.v[g] = pv.z;
+    p.color.v[3 * g] = color.x;
+    p.color.v[3 * g + 1] = color.y;
+    p.color.v[3 * g + 2] = color.z;
+    for (int i = 0; i < 4; i++) p.tile_rect.v[4 * g + i] = rect[i];
+    p.tiles_touched.v[g] = touched;
+    p.depth_keys.v[g] = touched > 0 ? floatBitsToUint(pv.z) : 0x7fffffffu;
+}

@@ -1,0 +1,234 @@
+//! Storage buffers with device addresses, allocated through gpu-allocator.
+
+use super::{Gpu, GpuShared};
+use anyhow::{anyhow, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Where a buffer lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MemoryKind {
+    /// Device-local working memory (mapped as well where the device shares memory with the host).
+    Device,
+    /// Host-visible memory written by the CPU every frame (parameter blocks, staging uploads).
+    Upload,
+    /// Host-visible memory the GPU writes and the CPU reads back.
+    Readback,
+}
+
+/// A storage buffer owned by its GPU context; freed on drop.
+pub struct Buffer {
+    gpu: Arc<GpuShared>,
+    pub(crate) buffer: vk::Buffer,
+    allocation: Option<Allocation>,
+    size: u64,
+    address: u64,
+}
+
+impl Buffer {
+    /// Allocates `size` bytes (at least 4). Out-of-memory errors name the request and the device memory.
+    pub fn new(gpu: &Gpu, name: &str, size: u64, kind: MemoryKind) -> Result<Buffer> {
+        let shared = &gpu.shared;
+        let size = size.max(4).next_multiple_of(4);
+        let info = &shared.info;
+        if size > info.max_memory_allocation {
+            return Err(anyhow!(
+                "buffer {name:?} needs {} MiB but {} allows at most {} MiB per allocation",
+                size >> 20,
+                info.name,
+                info.max_memory_allocation >> 20
+            ));
+        }
+        let device = &shared.device;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let buffer = unsafe {
+            device.create_buffer(
+                &vk::BufferCreateInfo::default()
+                    .size(size)
+                    .usage(usage)
+                    .sharing_mode(vk::SharingMode::EXCLUSIVE),
+                None,
+            )?
+        };
+        let requirements = unsafe { device.get_buffer_memory_requirements(buffer) };
+        let location = match kind {
+            MemoryKind::Device => MemoryLocation::GpuOnly,
+            MemoryKind::Upload => MemoryLocation::CpuToGpu,
+            MemoryKind::Readback => MemoryLocation::GpuToCpu,
+        };
+        let allocation = shared
+            .allocator
+            .lock()
+            .unwrap()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_buffer(buffer, None) };
+                return Err(anyhow!(
+                    "out of GPU memory: buffer {name:?} needs {} MiB; {} has {} MiB of device memory ({e})",
+                    size >> 20,
+                    info.name,
+                    info.device_local_memory >> 20
+                ));
+            }
+        };
+        unsafe { device.bind_buffer_memory(buffer, allocation.memory(), allocation.offset())? };
+        let address = unsafe {
+            device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(buffer))
+        };
+        Ok(Buffer {
+            gpu: shared.clone(),
+            buffer,
+            allocation: Some(allocation),
+            size,
+            address,
+        })
+    }
+
+    /// Allocates a device buffer holding `data`.
+    pub fn from_slice<T: bytemuck::Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer> {
+        let buffer = Buffer::new(
+            gpu,
+            name,
+            std::mem::size_of_val(data) as u64,
+            MemoryKind::Device,
+        )?;
+        buffer.upload(gpu, data)?;
+        Ok(buffer)
+    }
+
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    /// The device address shaders use to reach this buffer.
+    pub fn address(&self) -> u64 {
+        self.address
+    }
+
+    fn mapped(&self) -> Option<*mut u8> {
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_ptr())
+            .map(|p| p.as_ptr() as *mut u8)
+    }
+
+    /// Copies `data` to the start of the buffer: directly where the memory is host-visible, through a
+    /// staging buffer otherwise. Waits for completion.
+    pub fn upload<T: bytemuck::Pod>(&self, gpu: &Gpu, data: &[T]) -> Result<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if bytes.len() as u64 > self.size {
+            return Err(anyhow!(
+                "upload of {} bytes into a buffer of {} bytes",
+                bytes.len(),
+                self.size
+            ));
+        }
+        if bytes.is_empty() {
+            return Ok(());
+        }
+        if let Some(ptr) = self.mapped() {
+            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
+            return Ok(());
+        }
+        let staging = Buffer::new(
+            gpu,
+            "staging upload",
+            bytes.len() as u64,
+            MemoryKind::Upload,
+        )?;
+        let ptr = staging
+            .mapped()
+            .ok_or_else(|| anyhow!("upload staging memory is not mapped"))?;
+        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
+        let mut rec = super::Recorder::new(gpu)?;
+        rec.copy(&staging, self, bytes.len() as u64);
+        rec.submit_and_wait()?;
+        Ok(())
+    }
+
+    /// Reads back the first `count` elements. Waits for completion.
+    pub fn download<T: bytemuck::Pod>(&self, gpu: &Gpu, count: usize) -> Result<Vec<T>> {
+        self.download_at(gpu, 0, count)
+    }
+
+    /// Reads back `count` elements starting at element `first`. Waits for completion.
+    pub fn download_at<T: bytemuck::Pod>(
+        &self,
+        gpu: &Gpu,
+        first: u64,
+        count: usize,
+    ) -> Result<Vec<T>> {
+        let elem = std::mem::size_of::<T>() as u64;
+        let offset = first * elem;
+        let bytes = count as u64 * elem;
+        if offset + bytes > self.size {
+            return Err(anyhow!(
+                "download of {bytes} bytes from a buffer of {} bytes",
+                self.size
+            ));
+        }
+        let mut out = vec![T::zeroed(); count];
+        if count == 0 {
+            return Ok(out);
+        }
+        let out_bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        if let Some(ptr) = self.mapped() {
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    ptr.add(offset as usize),
+                    out_bytes.as_mut_ptr(),
+                    out_bytes.len(),
+                )
+            };
+            return Ok(out);
+        }
+        let staging = Buffer::new(gpu, "staging readback", bytes, MemoryKind::Readback)?;
+        let mut rec = super::Recorder::new(gpu)?;
+        rec.copy_region(self, offset, &staging, 0, bytes);
+        rec.submit_and_wait()?;
+        let ptr = staging
+            .mapped()
+            .ok_or_else(|| anyhow!("readback staging memory is not mapped"))?;
+        unsafe { std::ptr::copy_nonoverlapping(ptr, out_bytes.as_mut_ptr(), out_bytes.len()) };
+        Ok(out)
+    }
+
+    /// Writes a plain-old-data value to a host-visible buffer (parameter blocks); no GPU work.
+    pub fn write_pod<T: bytemuck::Pod>(&self, value: &T) -> Result<()> {
+        let bytes = bytemuck::bytes_of(value);
+        let ptr = self
+            .mapped()
+            .ok_or_else(|| anyhow!("write_pod on a buffer that is not host-visible"))?;
+        if bytes.len() as u64 > self.size {
+            return Err(anyhow!(
+                "write_pod of {} bytes into a buffer of {} bytes",
+                bytes.len(),
+                self.size
+            ));
+        }
+        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
+        Ok(())
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        unsafe { self.gpu.device.destroy_buffer(self.buffer, None) };
+        if let Some(a) = self.allocation.take() {
+            let _ = self.gpu.allocator.lock().unwrap().free(a);
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! Output helpers: every file is written to a temporary name beside its target and renamed into place,
+//! so a killed run never leaves a half-written file.
+
+use anyhow::{Context, Result};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Writes through `body` into a temporary file, syncs it and renames it onto `path`.
+pub fn write_atomic(
+    path: &Path,
+    body: impl FnOnce(&mut BufWriter<std::fs::File>) -> Result<()>,
+) -> Result<()> {
+    let tmp = temp_path(path);
+    let result = (|| -> Result<()> {
+        let file = std::fs::File::create(&tmp)
+            .with_context(|| format!("{}: cannot create", tmp.display()))?;
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        body(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+            .with_context(|| format!("{}: cannot move into place", path.display()))?;
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+/// 8-bit value of a [0, 1] float, rounded; values outside are clamped.
+pub fn to_u8(v: f32) -> u8 {
+    (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+}
+
+/// Writes an RGB PNG from planar float channels in [0, 1] (values are stored as given: the renderer's
+/// colors are already in the display space the scene was trained in).
+pub fn write_png_rgb(path: &Path, width: u32, height: u32, planar_rgb: &[f32]) -> Result<()> {
+    let hw = (width * height) as usize;
+    let mut pixels = vec![0u8; hw * 3];
+    for i in 0..hw {
+        for c in 0..3 {
+            pixels[i * 3 + c] = to_u8(planar_rgb[c * hw + i]);
+        }
+    }
+    write_png(path, width, height, image::ColorType::Rgb8, &pixels)
+}
+
+/// Writes a single-channel 8-bit PNG from floats in [0, 1].
+pub fn write_png_gray(path: &Path, width: u32, height: u32, values: &[f32]) -> Result<()> {
+    let pixels: Vec<u8> = values.iter().map(|&v| to_u8(v)).collect();
+    write_png(path, width, height, image::ColorType::L8, &pixels)
+}
+
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    color: image::ColorType,
+    pixels: &[u8],
+) -> Result<()> {
+    write_atomic(path, |w| {
+        image::write_buffer_with_format(w, pixels, width, height, color, image::ImageFormat::Png)
+            .map_err(Into::into)
+    })
+}
+
+/// Writes float channels (each width * height, row-major) as a 32-bit float EXR.
+pub fn write_exr(path: &Path, width: u32, height: u32, channels: &[(&str, &[f32])]) -> Result<()> {
+    use exr::prelude::*;
+    let size = Vec2(width as usize, height as usize);
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .iter()
+        .map(|(name, data)| AnyChannel::new(*name, FlatSamples::F32(data.to_vec())))
+        .collect();
+    let layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let image = Image::from_layer(layer);
+    write_atomic(path, |w| {
+        // exr needs Seek; buffer in memory first
+        let mut cursor = std::io::Cursor::new(Vec::new());
+        image
+            .write()
+            .to_buffered(&mut cursor)
+            .map_err(|e| anyhow::anyhow!("EXR encoding failed: {e}"))?;
+        w.write_all(cursor.get_ref())?;
+        Ok(())
+    })
+}
+
+/// Reads a single float channel from an EXR (the first channel, or the one named `name`).
+pub fn read_exr_channel(path: &Path, name: Option<&str>) -> Result<(u32, u32, Vec<f32>)> {
+    use exr::prelude::*;
+    let image = read_all_flat_layers_from_file(path)
+        .with_context(|| format!("{}: cannot read EXR", path.display()))?;
+    let layer = image
+        .layer_data
+        .first()
+        .ok_or_else(|| anyhow::anyhow!("{}: EXR without layers", path.display()))?;
+    let channel = match name {
+        Some(n) => layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == n),
+        None => layer.channel_data.list.first(),
+    }
+    .ok_or_else(|| anyhow::anyhow!("{}: EXR channel not found", path.display()))?;
+    let values = channel.sample_data.values_as_f32().collect();
+    Ok((layer.size.0 as u32, layer.size.1 as u32, values))
+}

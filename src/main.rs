@@ -1,0 +1,340 @@
+//! The `cogeo` command line.
+
+use anyhow::{anyhow, bail, Context, Result};
+use clap::{Args, Parser, Subcommand};
+use cogeo::gpu::{DeviceChoice, Gpu};
+use cogeo::io::{write_exr, write_png_gray, write_png_rgb};
+use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
+use cogeo::scene::{camera, colmap, ply, Camera, GaussianScene};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+
+#[derive(Parser)]
+#[command(
+    name = "cogeo",
+    version,
+    about = "Vulkan-native 3D Gaussian Splatting: render, train, tag and remove objects"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Args, Clone)]
+struct DeviceArgs {
+    /// Vulkan device to use: index or case-insensitive name substring (see `cogeo devices`).
+    /// Default: COGEO_DEVICE, else the first discrete GPU, then integrated, then CPU (lavapipe).
+    #[arg(long, global = true)]
+    device: Option<String>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List Vulkan devices with the limits cogeo cares about.
+    Devices,
+    /// Render a Gaussian scene (INRIA PLY) from a set of cameras to PNG (and EXR depth).
+    Render(RenderArgs),
+    /// Render the built-in default scene from an orbit of cameras (no data needed).
+    Demo(DemoArgs),
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Gaussian scene in the INRIA PLY layout.
+    #[arg(long)]
+    scene: PathBuf,
+    /// INRIA cameras.json with the views to render.
+    #[arg(long, conflicts_with = "colmap", required_unless_present = "colmap")]
+    cameras: Option<PathBuf>,
+    /// COLMAP model folder (containing cameras/images .bin or .txt, or sparse/0 with them).
+    #[arg(long)]
+    colmap: Option<PathBuf>,
+    /// Output folder (created if missing); files are written atomically.
+    #[arg(long)]
+    out: PathBuf,
+    /// Also write expected depth as a single-channel 32-bit EXR `<name>_depth.exr`.
+    #[arg(long)]
+    depth: bool,
+    /// Also write alpha (1 - final transmittance) as `<name>_alpha.png`.
+    #[arg(long)]
+    alpha: bool,
+    /// Also blend the scene's identity features (PLY properties f_obj_0..) into `<name>_features.exr`.
+    #[arg(long)]
+    features: bool,
+    /// Output width; intrinsics are scaled. With only one of --width/--height the aspect ratio is kept.
+    #[arg(long)]
+    width: Option<u32>,
+    /// Output height; intrinsics are scaled.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Background color r,g,b in [0, 1].
+    #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
+    background: [f32; 3],
+    /// Near plane: Gaussians with view depth at or below it are culled (INRIA uses 0.2).
+    #[arg(long, default_value_t = 0.01)]
+    near: f32,
+    /// Use at most this SH degree for color (default: the scene's).
+    #[arg(long)]
+    sh_degree: Option<u32>,
+    /// Print per-pass GPU times for each view.
+    #[arg(long)]
+    timings: bool,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+#[derive(Args)]
+struct DemoArgs {
+    /// Output folder for the rendered views and the scene.
+    #[arg(long, default_value = "demo_out")]
+    out: PathBuf,
+    /// Number of orbit views.
+    #[arg(long, default_value_t = 8)]
+    views: usize,
+    /// Image width.
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 480)]
+    height: u32,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected r,g,b numbers, got {s:?}"))?;
+    if v.len() != 3 || v.iter().any(|c| !(0.0..=1.0).contains(c)) {
+        return Err(format!(
+            "expected three values in [0, 1] as r,g,b, got {s:?}"
+        ));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
+fn progress(len: usize, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{msg:>10} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
+        )
+        .unwrap()
+        .progress_chars("=> "),
+    );
+    bar.set_message(what.to_string());
+    bar
+}
+
+fn open_gpu(device: &DeviceArgs) -> Result<Gpu> {
+    Gpu::new(&DeviceChoice::from_env(device.device.clone()))
+}
+
+fn load_scene(path: &Path) -> Result<GaussianScene> {
+    let scene = ply::read_ply(path)?;
+    scene.validate(&path.display().to_string())?;
+    Ok(scene)
+}
+
+fn resize_cameras(
+    cameras: Vec<Camera>,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<Vec<Camera>> {
+    if width == Some(0) || height == Some(0) {
+        bail!("--width and --height must be positive");
+    }
+    Ok(cameras
+        .into_iter()
+        .map(|c| match (width, height) {
+            (None, None) => c,
+            (Some(w), Some(h)) => c.resized(w, h),
+            (Some(w), None) => {
+                let h = ((c.height as f64 * w as f64 / c.width as f64).round() as u32).max(1);
+                c.resized(w, h)
+            }
+            (None, Some(h)) => {
+                let w = ((c.width as f64 * h as f64 / c.height as f64).round() as u32).max(1);
+                c.resized(w, h)
+            }
+        })
+        .collect())
+}
+
+/// Renders every camera and writes the requested files into `out`.
+fn render_views(
+    gpu: &Gpu,
+    scene: &GaussianScene,
+    cameras: &[Camera],
+    out: &Path,
+    settings: &RenderSettings,
+    depth: bool,
+    alpha: bool,
+    print_timings: bool,
+) -> Result<()> {
+    let features = if settings.features {
+        Some(
+            scene
+                .feature_matrix("f_obj_")
+                .ok_or_else(|| anyhow!("--features: the scene has no f_obj_* properties"))?,
+        )
+    } else {
+        None
+    };
+    let buffers = SceneBuffers::upload(
+        gpu,
+        scene,
+        features.as_ref().map(|(f, d)| (f.as_slice(), *d)),
+    )?;
+    let mut raster = Rasterizer::new(gpu)?;
+    let bar = progress(cameras.len(), "render");
+    for cam in cameras {
+        let r = raster.render(&buffers, cam, settings)?;
+        write_png_rgb(
+            &out.join(format!("{}.png", cam.name)),
+            r.width,
+            r.height,
+            &r.rgb,
+        )?;
+        if alpha {
+            write_png_gray(
+                &out.join(format!("{}_alpha.png", cam.name)),
+                r.width,
+                r.height,
+                &r.alpha,
+            )?;
+        }
+        if depth {
+            write_exr(
+                &out.join(format!("{}_depth.exr", cam.name)),
+                r.width,
+                r.height,
+                &[("Y", &r.expected_depth)],
+            )?;
+        }
+        if r.feature_dim > 0 {
+            let hw = (r.width * r.height) as usize;
+            let names: Vec<String> = (0..r.feature_dim).map(|c| format!("f{c:02}")).collect();
+            let channels: Vec<(&str, &[f32])> = names
+                .iter()
+                .enumerate()
+                .map(|(c, n)| (n.as_str(), &r.features[c * hw..(c + 1) * hw]))
+                .collect();
+            write_exr(
+                &out.join(format!("{}_features.exr", cam.name)),
+                r.width,
+                r.height,
+                &channels,
+            )?;
+        }
+        if print_timings {
+            let parts: Vec<String> = r
+                .timings
+                .iter()
+                .map(|t| format!("{} {:.2} ms", t.pass, t.ms))
+                .collect();
+            bar.println(format!(
+                "{}: {} intersections; {}",
+                cam.name,
+                r.num_intersections,
+                parts.join(", ")
+            ));
+        }
+        bar.inc(1);
+    }
+    bar.finish();
+    Ok(())
+}
+
+fn cmd_render(a: RenderArgs) -> Result<()> {
+    // Read and check every input before creating anything in --out.
+    let scene = load_scene(&a.scene)?;
+    let cameras = if let Some(path) = &a.cameras {
+        camera::read_cameras_json(path)?
+    } else {
+        let dir = a.colmap.as_ref().unwrap();
+        let model = colmap::read_colmap(dir)?;
+        for w in &model.warnings {
+            eprintln!("warning: {w}");
+        }
+        model.cameras
+    };
+    let cameras = resize_cameras(cameras, a.width, a.height)?;
+    if a.features && scene.feature_matrix("f_obj_").is_none() {
+        bail!(
+            "{}: --features needs f_obj_* properties in the scene (run `cogeo tag` first)",
+            a.scene.display()
+        );
+    }
+    if !(a.near > 0.0) {
+        bail!("--near must be positive");
+    }
+    let gpu = open_gpu(&a.device)?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    let settings = RenderSettings {
+        background: a.background,
+        near: a.near,
+        sh_degree: a.sh_degree,
+        features: a.features,
+        timestamps: a.timings,
+    };
+    render_views(
+        &gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings,
+    )?;
+    eprintln!("wrote {} view(s) to {}", cameras.len(), a.out.display());
+    Ok(())
+}
+
+fn cmd_demo(a: DemoArgs) -> Result<()> {
+    if a.views == 0 || a.width == 0 || a.height == 0 {
+        bail!("--views, --width and --height must be positive");
+    }
+    let gpu = open_gpu(&a.device)?;
+    eprintln!("device: {}", gpu.info().summary());
+    let scene = cogeo::demo::default_scene();
+    let cameras = cogeo::demo::orbit_cameras(a.views, a.width, a.height);
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    ply::write_ply(&scene, &a.out.join("scene.ply"))?;
+    camera::write_cameras_json(&cameras, &a.out.join("cameras.json"))?;
+    let settings = RenderSettings {
+        background: [1.0, 1.0, 1.0],
+        timestamps: true,
+        ..Default::default()
+    };
+    render_views(
+        &gpu, &scene, &cameras, &a.out, &settings, true, false, false,
+    )?;
+    eprintln!(
+        "rendered the built-in scene ({} Gaussians) from {} views into {} (scene.ply, cameras.json, view_*.png, view_*_depth.exr)",
+        scene.len(),
+        cameras.len(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Devices => cogeo::gpu::list_devices().map(|devs| {
+            if devs.is_empty() {
+                println!("no Vulkan devices found");
+            }
+            for d in devs {
+                println!("{}", d.summary());
+            }
+        }),
+        Command::Render(a) => cmd_render(a),
+        Command::Demo(a) => cmd_demo(a),
+    };
+    if let Err(e) = result {
+        // one line: the error and its causes
+        let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
+        eprintln!("error: {}", chain.join(": "));
+        std::process::exit(1);
+    }
+}

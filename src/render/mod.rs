@@ -1,0 +1,526 @@
+//! Forward rasterization: projection + SH (project.comp), global depth sort, tile binning
+//! (gather_counts.comp, scan, emit_intersections.comp), stable tile sort, tile ranges
+//! (tile_ranges.comp), 16x16 tile alpha blending of RGB / alpha / depth (blend.comp) and N-dim
+//! features (blend_features.comp). `reference` is the dense f64 CPU twin the tests check against.
+
+pub mod params;
+pub mod reference;
+pub mod scan;
+pub mod sort;
+
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Recorder};
+use crate::scene::{Camera, GaussianScene};
+use crate::shaders;
+use anyhow::{bail, Result};
+use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
+use sort::RadixSort;
+
+pub const TILE: u32 = 16;
+/// Channels the feature blend pass handles per dispatch.
+const FEATURE_CHANNELS_PER_PASS: u32 = 32;
+
+/// A scene's attributes on the GPU (structure of arrays, one buffer per attribute).
+pub struct SceneBuffers {
+    pub means: Buffer,
+    pub log_scales: Buffer,
+    pub quats: Buffer,
+    pub opacity_logits: Buffer,
+    pub sh: Buffer,
+    /// N x D row-major identity features, when present.
+    pub features: Option<Buffer>,
+    pub num_gaussians: u32,
+    pub sh_degree: u32,
+    pub feature_dim: u32,
+}
+
+impl SceneBuffers {
+    /// Uploads a scene; `features` is an N x D row-major matrix.
+    pub fn upload(
+        gpu: &Gpu,
+        scene: &GaussianScene,
+        features: Option<(&[f32], usize)>,
+    ) -> Result<SceneBuffers> {
+        let n = scene.len();
+        let bytes = n as u64 * (3 + 3 + 4 + 1 + 3 * scene.sh_coeffs() as u64) * 4;
+        let with_context = |r: Result<Buffer>| {
+            r.map_err(|e| {
+                e.context(format!(
+                    "cannot upload a scene of {n} Gaussians (SH degree {}, {} MiB of attributes) to {}",
+                    scene.sh_degree,
+                    bytes >> 20,
+                    gpu.info().name
+                ))
+            })
+        };
+        let features = match features {
+            Some((f, d)) => {
+                assert_eq!(f.len(), n * d, "feature matrix must be N x D");
+                Some((
+                    with_context(Buffer::from_slice(gpu, "features", f))?,
+                    d as u32,
+                ))
+            }
+            None => None,
+        };
+        Ok(SceneBuffers {
+            means: with_context(Buffer::from_slice(gpu, "means", &scene.means))?,
+            log_scales: with_context(Buffer::from_slice(gpu, "log_scales", &scene.log_scales))?,
+            quats: with_context(Buffer::from_slice(gpu, "quats", &scene.quats))?,
+            opacity_logits: with_context(Buffer::from_slice(
+                gpu,
+                "opacity_logits",
+                &scene.opacity_logits,
+            ))?,
+            sh: with_context(Buffer::from_slice(gpu, "sh", &scene.sh))?,
+            num_gaussians: n as u32,
+            sh_degree: scene.sh_degree,
+            feature_dim: features.as_ref().map(|f| f.1).unwrap_or(0),
+            features: features.map(|f| f.0),
+        })
+    }
+}
+
+/// Per-render options.
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub background: [f32; 3],
+    /// Gaussians with view depth z <= near are culled (conventions.md; INRIA uses 0.2).
+    pub near: f32,
+    /// SH degree used for color (clamped to the stored degree); None = stored degree.
+    pub sh_degree: Option<u32>,
+    /// Also blend the scene's feature matrix.
+    pub features: bool,
+    /// Record GPU timestamps per pass.
+    pub timestamps: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            background: [0.0; 3],
+            near: 0.01,
+            sh_degree: None,
+            features: false,
+            timestamps: false,
+        }
+    }
+}
+
+/// Rendered planes (row-major, width * height each).
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    pub width: u32,
+    pub height: u32,
+    /// 3 planes: R, G, B.
+    pub rgb: Vec<f32>,
+    pub alpha: Vec<f32>,
+    /// Accumulated depth sum w_i z_i.
+    pub depth: Vec<f32>,
+    pub expected_depth: Vec<f32>,
+    pub final_t: Vec<f32>,
+    pub n_contrib: Vec<u32>,
+    /// feature_dim planes, when features were rendered.
+    pub features: Vec<f32>,
+    pub feature_dim: u32,
+    pub num_intersections: u32,
+    pub timings: Vec<PassTiming>,
+}
+
+/// Working buffers of one frame, grown on demand and reused.
+struct FrameBuffers {
+    gaussian_capacity: u32,
+    xy: Buffer,
+    conic_opacity: Buffer,
+    depth: Buffer,
+    color: Buffer,
+    tile_rect: Buffer,
+    tiles_touched: Buffer,
+    depth_keys: Buffer,
+    depth_order: Buffer,
+    isect_offsets: Buffer,
+}
+
+struct IntersectionBuffers {
+    capacity: u32,
+    tile: Buffer,
+    gauss: Buffer,
+    tile_alt: Buffer,
+    gauss_alt: Buffer,
+}
+
+struct ImageBuffers {
+    width: u32,
+    height: u32,
+    feature_dim: u32,
+    tile_ranges: Buffer,
+    rgb: Buffer,
+    alpha: Buffer,
+    depth: Buffer,
+    expected_depth: Buffer,
+    final_t: Buffer,
+    n_contrib: Buffer,
+    features: Buffer,
+}
+
+/// Owner of the forward-pass pipelines and their working memory.
+pub struct Rasterizer {
+    gpu: Gpu,
+    project: ComputePipeline,
+    gather: ComputePipeline,
+    emit: ComputePipeline,
+    ranges: ComputePipeline,
+    blend: ComputePipeline,
+    blend_features: ComputePipeline,
+    sort: RadixSort,
+    scan: scan::PrefixScan,
+    params: Buffer,
+    frame: Option<FrameBuffers>,
+    isect: Option<IntersectionBuffers>,
+    image: Option<ImageBuffers>,
+}
+
+fn grow(n: u64) -> u64 {
+    (n + n / 4).max(1024)
+}
+
+impl Rasterizer {
+    pub fn new(gpu: &Gpu) -> Result<Rasterizer> {
+        Ok(Rasterizer {
+            gpu: gpu.clone(),
+            project: ComputePipeline::new(gpu, "project", shaders::PROJECT)?,
+            gather: ComputePipeline::new(gpu, "gather_counts", shaders::GATHER_COUNTS)?,
+            emit: ComputePipeline::new(gpu, "emit_intersections", shaders::EMIT_INTERSECTIONS)?,
+            ranges: ComputePipeline::new(gpu, "tile_ranges", shaders::TILE_RANGES)?,
+            blend: ComputePipeline::new(gpu, "blend", shaders::BLEND)?,
+            blend_features: ComputePipeline::new(gpu, "blend_features", shaders::BLEND_FEATURES)?,
+            sort: RadixSort::new(gpu)?,
+            scan: scan::PrefixScan::new(gpu)?,
+            params: Buffer::new(
+                gpu,
+                "render params",
+                std::mem::size_of::<RenderParams>() as u64,
+                MemoryKind::Upload,
+            )?,
+            frame: None,
+            isect: None,
+            image: None,
+        })
+    }
+
+    fn reserve_gaussians(&mut self, n: u32) -> Result<()> {
+        if self
+            .frame
+            .as_ref()
+            .is_some_and(|f| f.gaussian_capacity >= n)
+        {
+            return Ok(());
+        }
+        self.frame = None;
+        let cap = grow(n as u64);
+        let g = &self.gpu;
+        let buf = |name: &str, per: u64| Buffer::new(g, name, cap * per * 4, MemoryKind::Device);
+        self.frame = Some(FrameBuffers {
+            gaussian_capacity: cap as u32,
+            xy: buf("xy", 2)?,
+            conic_opacity: buf("conic_opacity", 4)?,
+            depth: buf("depth", 1)?,
+            color: buf("color", 3)?,
+            tile_rect: buf("tile_rect", 4)?,
+            tiles_touched: buf("tiles_touched", 1)?,
+            depth_keys: buf("depth_keys", 1)?,
+            depth_order: buf("depth_order", 1)?,
+            isect_offsets: Buffer::new(g, "isect_offsets", (cap + 1) * 4, MemoryKind::Device)?,
+        });
+        self.sort.reserve(cap)?;
+        self.scan.reserve(cap + 1)?;
+        // the depth sort ping-pongs through the intersection buffers' alternates
+        self.reserve_intersections(cap as u32)?;
+        Ok(())
+    }
+
+    fn reserve_intersections(&mut self, m: u32) -> Result<()> {
+        if self.isect.as_ref().is_some_and(|b| b.capacity >= m) {
+            return Ok(());
+        }
+        self.isect = None;
+        let cap = grow(m as u64);
+        let g = &self.gpu;
+        let buf = |name: &str| Buffer::new(g, name, cap * 4, MemoryKind::Device);
+        self.isect = Some(IntersectionBuffers {
+            capacity: cap as u32,
+            tile: buf("isect_tile")?,
+            gauss: buf("isect_gauss")?,
+            tile_alt: buf("isect_tile_alt")?,
+            gauss_alt: buf("isect_gauss_alt")?,
+        });
+        self.sort.reserve(cap)?;
+        Ok(())
+    }
+
+    fn reserve_image(&mut self, width: u32, height: u32, feature_dim: u32) -> Result<()> {
+        if self
+            .image
+            .as_ref()
+            .is_some_and(|i| i.width == width && i.height == height && i.feature_dim >= feature_dim)
+        {
+            return Ok(());
+        }
+        self.image = None;
+        let g = &self.gpu;
+        let hw = width as u64 * height as u64;
+        let tiles = (width.div_ceil(TILE) * height.div_ceil(TILE)) as u64;
+        let buf = |name: &str, n: u64| Buffer::new(g, name, n * 4, MemoryKind::Device);
+        self.image = Some(ImageBuffers {
+            width,
+            height,
+            feature_dim,
+            tile_ranges: buf("tile_ranges", 2 * tiles)?,
+            rgb: buf("out_rgb", 3 * hw)?,
+            alpha: buf("out_alpha", hw)?,
+            depth: buf("out_depth", hw)?,
+            expected_depth: buf("out_expected_depth", hw)?,
+            final_t: buf("out_final_t", hw)?,
+            n_contrib: buf("out_n_contrib", hw)?,
+            features: buf("out_features", feature_dim.max(1) as u64 * hw)?,
+        });
+        Ok(())
+    }
+
+    /// Renders one view. Two submissions: projection, depth sort and the scan of tile counts; then,
+    /// once the number of intersections is known, emission, tile sort, ranges and blending.
+    pub fn render(
+        &mut self,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<RenderOutput> {
+        let (width, height) = (camera.width, camera.height);
+        if width == 0 || height == 0 {
+            bail!("camera {:?} has an empty image size", camera.name);
+        }
+        let n = scene.num_gaussians;
+        if n == 0 {
+            bail!("cannot render an empty scene");
+        }
+        let feature_dim = if settings.features {
+            scene.feature_dim
+        } else {
+            0
+        };
+        if settings.features && scene.features.is_none() {
+            bail!("features requested but the scene has none");
+        }
+        self.reserve_gaussians(n)?;
+        self.reserve_image(width, height, feature_dim)?;
+        let tiles_x = width.div_ceil(TILE);
+        let tiles_y = height.div_ceil(TILE);
+        let num_tiles = tiles_x * tiles_y;
+
+        let mut params = self.frame_params(scene, camera, settings, feature_dim, tiles_x, tiles_y);
+        self.params.write_pod(&params)?;
+        let push = ParamsPush {
+            params: self.params.address(),
+        };
+        let frame = self.frame.as_ref().unwrap();
+        let isect = self.isect.as_ref().unwrap();
+
+        // submission 1: project, depth sort, scan of touched counts in depth order
+        let mut rec = Recorder::with_timestamps(&self.gpu, settings.timestamps)?;
+        rec.dispatch(&self.project, &push, dispatch_1d(n.div_ceil(256)));
+        rec.mark("project");
+        let in_alt = self.sort.record(
+            &mut rec,
+            &frame.depth_keys,
+            &frame.depth_order,
+            &isect.tile_alt,
+            &isect.gauss_alt,
+            n,
+            31,
+        );
+        assert!(
+            !in_alt,
+            "the 31-bit depth sort has an even number of passes"
+        );
+        rec.mark("depth sort");
+        rec.dispatch(&self.gather, &push, dispatch_1d((n + 1).div_ceil(256)));
+        self.scan.record(&mut rec, &frame.isect_offsets, n + 1);
+        rec.mark("tile count scan");
+        let mut timings = rec.submit_and_wait()?;
+        let m = frame
+            .isect_offsets
+            .download_at::<u32>(&self.gpu, n as u64, 1)?[0];
+
+        // submission 2: emit intersections, sort by tile, find ranges, blend
+        self.reserve_intersections(m)?;
+        let isect = self.isect.as_ref().unwrap();
+        let image = self.image.as_ref().unwrap();
+        let tile_bits = 32 - (num_tiles.max(2) - 1).leading_zeros();
+        let sorted_in_alt = sort::passes_for_bits(tile_bits) % 2 == 1;
+        let (sorted_tile, sorted_gauss) = if sorted_in_alt {
+            (&isect.tile_alt, &isect.gauss_alt)
+        } else {
+            (&isect.tile, &isect.gauss)
+        };
+        params.isect_tile = sorted_tile.address();
+        params.isect_gauss = sorted_gauss.address();
+        self.params.write_pod(&params)?;
+
+        let mut rec = Recorder::with_timestamps(&self.gpu, settings.timestamps)?;
+        rec.fill(&image.tile_ranges, 0, num_tiles as u64 * 8, 0);
+        if m > 0 {
+            let emit_push = EmitPush {
+                params: push.params,
+                out_tile: isect.tile.address(),
+                out_gauss: isect.gauss.address(),
+            };
+            rec.dispatch(&self.emit, &emit_push, dispatch_1d(n.div_ceil(256)));
+            rec.mark("emit intersections");
+            let ended_in_alt = self.sort.record(
+                &mut rec,
+                &isect.tile,
+                &isect.gauss,
+                &isect.tile_alt,
+                &isect.gauss_alt,
+                m,
+                tile_bits,
+            );
+            debug_assert_eq!(ended_in_alt, sorted_in_alt);
+            rec.mark("tile sort");
+            rec.dispatch(
+                &self.ranges,
+                &ParamsPushU32 {
+                    params: push.params,
+                    value: m,
+                    pad: 0,
+                },
+                dispatch_1d(m.div_ceil(256)),
+            );
+            rec.mark("tile ranges");
+        }
+        rec.dispatch(&self.blend, &push, dispatch_1d(num_tiles));
+        rec.mark("blend");
+        let mut offset = 0;
+        while offset < feature_dim {
+            rec.dispatch(
+                &self.blend_features,
+                &ParamsPushU32 {
+                    params: push.params,
+                    value: offset,
+                    pad: 0,
+                },
+                dispatch_1d(num_tiles),
+            );
+            offset += FEATURE_CHANNELS_PER_PASS;
+        }
+        if feature_dim > 0 {
+            rec.mark("blend features");
+        }
+        timings.extend(rec.submit_and_wait()?);
+
+        let hw = (width * height) as usize;
+        let g = &self.gpu;
+        Ok(RenderOutput {
+            width,
+            height,
+            rgb: image.rgb.download(g, 3 * hw)?,
+            alpha: image.alpha.download(g, hw)?,
+            depth: image.depth.download(g, hw)?,
+            expected_depth: image.expected_depth.download(g, hw)?,
+            final_t: image.final_t.download(g, hw)?,
+            n_contrib: image.n_contrib.download(g, hw)?,
+            features: if feature_dim > 0 {
+                image.features.download(g, feature_dim as usize * hw)?
+            } else {
+                Vec::new()
+            },
+            feature_dim,
+            num_intersections: m,
+            timings,
+        })
+    }
+
+    fn frame_params(
+        &self,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        settings: &RenderSettings,
+        feature_dim: u32,
+        tiles_x: u32,
+        tiles_y: u32,
+    ) -> RenderParams {
+        let f = self.frame.as_ref().unwrap();
+        let im = self.image.as_ref().unwrap();
+        let r = &camera.rotation;
+        let t = &camera.translation;
+        let c = camera.center();
+        let (tan_fovx, tan_fovy) = camera.tan_half_fov();
+        let sh_coeffs = (scene.sh_degree + 1) * (scene.sh_degree + 1);
+        RenderParams {
+            means: scene.means.address(),
+            log_scales: scene.log_scales.address(),
+            quats: scene.quats.address(),
+            opacity_logits: scene.opacity_logits.address(),
+            sh: scene.sh.address(),
+            features: scene.features.as_ref().map(|b| b.address()).unwrap_or(0),
+            xy: f.xy.address(),
+            conic_opacity: f.conic_opacity.address(),
+            depth: f.depth.address(),
+            color: f.color.address(),
+            tile_rect: f.tile_rect.address(),
+            tiles_touched: f.tiles_touched.address(),
+            depth_keys: f.depth_keys.address(),
+            depth_order: f.depth_order.address(),
+            isect_offsets: f.isect_offsets.address(),
+            isect_tile: 0,
+            isect_gauss: 0,
+            tile_ranges: im.tile_ranges.address(),
+            out_rgb: im.rgb.address(),
+            out_alpha: im.alpha.address(),
+            out_depth: im.depth.address(),
+            out_expected_depth: im.expected_depth.address(),
+            out_final_t: im.final_t.address(),
+            out_n_contrib: im.n_contrib.address(),
+            out_features: im.features.address(),
+            viewmat: [
+                r[0][0] as f32,
+                r[0][1] as f32,
+                r[0][2] as f32,
+                t[0] as f32,
+                r[1][0] as f32,
+                r[1][1] as f32,
+                r[1][2] as f32,
+                t[1] as f32,
+                r[2][0] as f32,
+                r[2][1] as f32,
+                r[2][2] as f32,
+                t[2] as f32,
+            ],
+            campos: [c[0] as f32, c[1] as f32, c[2] as f32, 0.0],
+            fx: camera.fx as f32,
+            fy: camera.fy as f32,
+            cx: camera.cx as f32,
+            cy: camera.cy as f32,
+            tan_fovx: tan_fovx as f32,
+            tan_fovy: tan_fovy as f32,
+            near_plane: settings.near,
+            pad0: 0.0,
+            background: [
+                settings.background[0],
+                settings.background[1],
+                settings.background[2],
+                0.0,
+            ],
+            num_gaussians: scene.num_gaussians,
+            sh_degree: settings
+                .sh_degree
+                .unwrap_or(scene.sh_degree)
+                .min(scene.sh_degree),
+            sh_coeffs,
+            width: camera.width,
+            height: camera.height,
+            tiles_x,
+            tiles_y,
+            feature_dim,
+        }
+    }
+}

@@ -1,0 +1,114 @@
+//! Stable GPU radix sort of (u32 key, u32 value) pairs: 4-bit digits, reduce-then-scan per pass
+//! (radix_count.comp, exclusive scan of the digit-major histogram, radix_scatter.comp). Needs no
+//! subgroup operations and no forward-progress guarantees between workgroups.
+
+use super::scan::PrefixScan;
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
+use crate::shaders;
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+pub const BLOCK_KEYS: u32 = 256 * 16;
+pub const RADIX_BITS: u32 = 4;
+const RADIX: u32 = 1 << RADIX_BITS;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SortPush {
+    keys_in: u64,
+    values_in: u64,
+    keys_out: u64,
+    values_out: u64,
+    histogram: u64,
+    n: u32,
+    shift: u32,
+    num_blocks: u32,
+    pad: u32,
+}
+
+pub struct RadixSort {
+    gpu: Gpu,
+    count: ComputePipeline,
+    scatter: ComputePipeline,
+    scan: PrefixScan,
+    histogram: Option<Buffer>,
+    capacity: u64,
+}
+
+/// Number of 4-bit passes needed to sort keys below 2^bits.
+pub fn passes_for_bits(bits: u32) -> u32 {
+    bits.div_ceil(RADIX_BITS)
+}
+
+impl RadixSort {
+    pub fn new(gpu: &Gpu) -> Result<RadixSort> {
+        Ok(RadixSort {
+            gpu: gpu.clone(),
+            count: ComputePipeline::new(gpu, "radix_count", shaders::RADIX_COUNT)?,
+            scatter: ComputePipeline::new(gpu, "radix_scatter", shaders::RADIX_SCATTER)?,
+            scan: PrefixScan::new(gpu)?,
+            histogram: None,
+            capacity: 0,
+        })
+    }
+
+    /// Makes sure up to `n` pairs can be sorted.
+    pub fn reserve(&mut self, n: u64) -> Result<()> {
+        if n <= self.capacity && self.histogram.is_some() {
+            return Ok(());
+        }
+        let n = n.max(1) + n / 4;
+        let hist = n.div_ceil(BLOCK_KEYS as u64) * RADIX as u64;
+        self.histogram = Some(Buffer::new(
+            &self.gpu,
+            "radix histogram",
+            hist * 4,
+            MemoryKind::Device,
+        )?);
+        self.scan.reserve(hist)?;
+        self.capacity = n;
+        Ok(())
+    }
+
+    /// Records a stable sort of `n` pairs by the low `bits` bits of the keys, ping-ponging between
+    /// (keys, values) and (keys_alt, values_alt). Returns true when the result ends in the alt buffers.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &self,
+        rec: &mut Recorder,
+        keys: &Buffer,
+        values: &Buffer,
+        keys_alt: &Buffer,
+        values_alt: &Buffer,
+        n: u32,
+        bits: u32,
+    ) -> bool {
+        assert!(n as u64 <= self.capacity, "radix sort: reserve({n}) first");
+        if n == 0 {
+            return false;
+        }
+        let hist = self.histogram.as_ref().unwrap();
+        let num_blocks = n.div_ceil(BLOCK_KEYS);
+        let mut src = (keys, values);
+        let mut dst = (keys_alt, values_alt);
+        let passes = passes_for_bits(bits);
+        for pass in 0..passes {
+            let push = SortPush {
+                keys_in: src.0.address(),
+                values_in: src.1.address(),
+                keys_out: dst.0.address(),
+                values_out: dst.1.address(),
+                histogram: hist.address(),
+                n,
+                shift: pass * RADIX_BITS,
+                num_blocks,
+                pad: 0,
+            };
+            rec.dispatch(&self.count, &push, dispatch_1d(num_blocks));
+            self.scan.record(rec, hist, num_blocks * RADIX);
+            rec.dispatch(&self.scatter, &push, dispatch_1d(num_blocks));
+            std::mem::swap(&mut src, &mut dst);
+        }
+        passes % 2 == 1
+    }
+}

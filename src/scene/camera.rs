@@ -1,0 +1,223 @@
+//! Pinhole cameras in the OpenCV/COLMAP frame (+x right, +y down, +z forward), and INRIA cameras.json.
+
+use anyhow::{anyhow, bail, Context, Result};
+use std::path::Path;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    /// Image name without extension (output files are `<name>.png`).
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+    /// World-to-camera rotation, row-major.
+    pub rotation: [[f64; 3]; 3],
+    /// World-to-camera translation.
+    pub translation: [f64; 3],
+}
+
+impl Camera {
+    /// Camera center in world coordinates: -R^T t.
+    pub fn center(&self) -> [f64; 3] {
+        let r = &self.rotation;
+        let t = &self.translation;
+        [
+            -(r[0][0] * t[0] + r[1][0] * t[1] + r[2][0] * t[2]),
+            -(r[0][1] * t[0] + r[1][1] * t[1] + r[2][1] * t[2]),
+            -(r[0][2] * t[0] + r[1][2] * t[1] + r[2][2] * t[2]),
+        ]
+    }
+
+    /// World point to camera coordinates.
+    pub fn to_camera(&self, p: [f64; 3]) -> [f64; 3] {
+        let r = &self.rotation;
+        let t = &self.translation;
+        [
+            r[0][0] * p[0] + r[0][1] * p[1] + r[0][2] * p[2] + t[0],
+            r[1][0] * p[0] + r[1][1] * p[1] + r[1][2] * p[2] + t[1],
+            r[2][0] * p[0] + r[2][1] * p[1] + r[2][2] * p[2] + t[2],
+        ]
+    }
+
+    /// tan of half the field of view along x and y.
+    pub fn tan_half_fov(&self) -> (f64, f64) {
+        (
+            0.5 * self.width as f64 / self.fx,
+            0.5 * self.height as f64 / self.fy,
+        )
+    }
+
+    /// The same camera for an image resized to width x height (intrinsics scaled per axis).
+    pub fn resized(&self, width: u32, height: u32) -> Camera {
+        let sx = width as f64 / self.width as f64;
+        let sy = height as f64 / self.height as f64;
+        Camera {
+            width,
+            height,
+            fx: self.fx * sx,
+            fy: self.fy * sy,
+            cx: self.cx * sx,
+            cy: self.cy * sy,
+            ..self.clone()
+        }
+    }
+
+    /// A camera at `eye` looking at `target` with `up` pointing roughly up in the image (-y).
+    pub fn look_at(
+        name: &str,
+        width: u32,
+        height: u32,
+        fov_x_deg: f64,
+        eye: [f64; 3],
+        target: [f64; 3],
+        up: [f64; 3],
+    ) -> Camera {
+        let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+        let norm = |a: [f64; 3]| {
+            let l = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            [a[0] / l, a[1] / l, a[2] / l]
+        };
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let z = norm(sub(target, eye));
+        let x = norm(cross(z, up)); // right, when y points down
+        let y = cross(z, x);
+        let rotation = [x, y, z];
+        let translation = [
+            -(x[0] * eye[0] + x[1] * eye[1] + x[2] * eye[2]),
+            -(y[0] * eye[0] + y[1] * eye[1] + y[2] * eye[2]),
+            -(z[0] * eye[0] + z[1] * eye[1] + z[2] * eye[2]),
+        ];
+        let fx = 0.5 * width as f64 / (0.5 * fov_x_deg.to_radians()).tan();
+        Camera {
+            name: name.to_string(),
+            width,
+            height,
+            fx,
+            fy: fx,
+            cx: width as f64 / 2.0,
+            cy: height as f64 / 2.0,
+            rotation,
+            translation,
+        }
+    }
+}
+
+/// World-to-camera rotation from a COLMAP quaternion (w, x, y, z).
+pub fn rotation_from_qvec(q: [f64; 4]) -> [[f64; 3]; 3] {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y - w * z),
+            2.0 * (x * z + w * y),
+        ],
+        [
+            2.0 * (x * y + w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z - w * x),
+        ],
+        [
+            2.0 * (x * z - w * y),
+            2.0 * (y * z + w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
+}
+
+#[derive(serde::Deserialize, serde::Serialize)]
+struct JsonCamera {
+    #[serde(default)]
+    id: i64,
+    img_name: String,
+    width: u32,
+    height: u32,
+    position: [f64; 3],
+    rotation: [[f64; 3]; 3],
+    fx: f64,
+    fy: f64,
+}
+
+/// Reads INRIA `cameras.json`: camera-to-world rotation and camera center, principal point centered.
+pub fn read_cameras_json(path: &Path) -> Result<Vec<Camera>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let list: Vec<JsonCamera> = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not an INRIA cameras.json", path.display()))?;
+    if list.is_empty() {
+        bail!("{}: no cameras", path.display());
+    }
+    list.into_iter()
+        .map(|c| {
+            if c.width == 0 || c.height == 0 || !(c.fx > 0.0 && c.fy > 0.0) {
+                return Err(anyhow!(
+                    "{}: camera {:?} has invalid size or focal length",
+                    path.display(),
+                    c.img_name
+                ));
+            }
+            let r = c.rotation; // camera to world
+            let rotation = [
+                [r[0][0], r[1][0], r[2][0]],
+                [r[0][1], r[1][1], r[2][1]],
+                [r[0][2], r[1][2], r[2][2]],
+            ];
+            let p = c.position;
+            let translation = [
+                -(rotation[0][0] * p[0] + rotation[0][1] * p[1] + rotation[0][2] * p[2]),
+                -(rotation[1][0] * p[0] + rotation[1][1] * p[1] + rotation[1][2] * p[2]),
+                -(rotation[2][0] * p[0] + rotation[2][1] * p[1] + rotation[2][2] * p[2]),
+            ];
+            Ok(Camera {
+                name: c.img_name,
+                width: c.width,
+                height: c.height,
+                fx: c.fx,
+                fy: c.fy,
+                cx: c.width as f64 / 2.0,
+                cy: c.height as f64 / 2.0,
+                rotation,
+                translation,
+            })
+        })
+        .collect()
+}
+
+/// Writes INRIA `cameras.json` (atomically).
+pub fn write_cameras_json(cameras: &[Camera], path: &Path) -> Result<()> {
+    let list: Vec<JsonCamera> = cameras
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let r = c.rotation;
+            JsonCamera {
+                id: i as i64,
+                img_name: c.name.clone(),
+                width: c.width,
+                height: c.height,
+                position: c.center(),
+                rotation: [
+                    [r[0][0], r[1][0], r[2][0]],
+                    [r[0][1], r[1][1], r[2][1]],
+                    [r[0][2], r[1][2], r[2][2]],
+                ],
+                fx: c.fx,
+                fy: c.fy,
+            }
+        })
+        .collect();
+    let text = serde_json::to_string_pretty(&list)?;
+    crate::io::write_atomic(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(Into::into)
+    })
+}

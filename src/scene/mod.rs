@@ -1,0 +1,127 @@
+//! Gaussian scenes (CPU side, structure of arrays), INRIA PLY I/O and cameras.
+
+pub mod camera;
+pub mod colmap;
+pub mod ply;
+
+pub use camera::Camera;
+
+use anyhow::{bail, Result};
+
+/// A scalar type a PLY property can have.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlyType {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+/// A per-Gaussian property the scene does not interpret (identity features, labels, ...), kept so
+/// that reading and writing a PLY loses nothing. Values are held as f64, which represents every
+/// value of every PLY scalar type exactly.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExtraProperty {
+    pub name: String,
+    pub ty: PlyType,
+    pub values: Vec<f64>,
+}
+
+/// A 3D Gaussian scene with parameters stored before activation (conventions.md).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GaussianScene {
+    pub means: Vec<[f32; 3]>,
+    /// nx, ny, nz of the INRIA layout (zeros in practice; kept for exact round trips).
+    pub normals: Vec<[f32; 3]>,
+    /// log sigma per axis.
+    pub log_scales: Vec<[f32; 3]>,
+    /// (w, x, y, z), not normalized.
+    pub quats: Vec<[f32; 4]>,
+    /// logit of opacity.
+    pub opacity_logits: Vec<f32>,
+    /// Stored SH degree (0..=3).
+    pub sh_degree: u32,
+    /// SH coefficients, [gaussian][basis k][channel c], K = (sh_degree + 1)^2 bases.
+    pub sh: Vec<f32>,
+    pub extras: Vec<ExtraProperty>,
+}
+
+/// SH coefficients per channel for a degree.
+pub fn sh_coeffs(degree: u32) -> usize {
+    ((degree + 1) * (degree + 1)) as usize
+}
+
+impl GaussianScene {
+    pub fn len(&self) -> usize {
+        self.means.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.means.is_empty()
+    }
+
+    pub fn sh_coeffs(&self) -> usize {
+        sh_coeffs(self.sh_degree)
+    }
+
+    /// Checks what rendering needs: at least one Gaussian, finite parameters, non-zero quaternions.
+    /// `what` names the source in the error (usually the file path).
+    pub fn validate(&self, what: &str) -> Result<()> {
+        if self.is_empty() {
+            bail!("{what}: the scene has no Gaussians");
+        }
+        let n = self.len();
+        let k = self.sh_coeffs();
+        if self.log_scales.len() != n
+            || self.quats.len() != n
+            || self.opacity_logits.len() != n
+            || self.sh.len() != n * k * 3
+        {
+            bail!("{what}: attribute arrays disagree in length");
+        }
+        for i in 0..n {
+            let finite = self.means[i].iter().all(|v| v.is_finite())
+                && self.log_scales[i].iter().all(|v| v.is_finite())
+                && self.quats[i].iter().all(|v| v.is_finite())
+                && self.opacity_logits[i].is_finite()
+                && self.sh[i * k * 3..(i + 1) * k * 3]
+                    .iter()
+                    .all(|v| v.is_finite());
+            if !finite {
+                bail!("{what}: Gaussian {i} has a NaN or infinite parameter");
+            }
+            let q = self.quats[i];
+            if q.iter().map(|v| v * v).sum::<f32>() == 0.0 {
+                bail!("{what}: Gaussian {i} has a zero-norm rotation quaternion");
+            }
+        }
+        Ok(())
+    }
+
+    /// The extra properties `{prefix}0..{prefix}{D-1}` as an N x D row-major matrix, if present.
+    pub fn feature_matrix(&self, prefix: &str) -> Option<(Vec<f32>, usize)> {
+        let mut columns = Vec::new();
+        while let Some(p) = self
+            .extras
+            .iter()
+            .find(|e| e.name == format!("{prefix}{}", columns.len()))
+        {
+            columns.push(p);
+        }
+        if columns.is_empty() {
+            return None;
+        }
+        let d = columns.len();
+        let mut out = vec![0f32; self.len() * d];
+        for (c, col) in columns.iter().enumerate() {
+            for (i, v) in col.values.iter().enumerate() {
+                out[i * d + c] = *v as f32;
+            }
+        }
+        Some((out, d))
+    }
+}
