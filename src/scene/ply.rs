@@ -277,7 +277,12 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
                     let tok = tokens.next().ok_or_else(|| {
                         anyhow!("{what}: file ends in vertex {i} of {n} (truncated PLY)")
                     })?;
-                    let v: f64 = tok.parse().map_err(|_| {
+                    // float properties are parsed as f32 directly: going through f64 could round twice
+                    let parsed = match props[j].1 {
+                        PlyType::F32 => tok.parse::<f32>().map(|v| v as f64).ok(),
+                        _ => tok.parse::<f64>().ok(),
+                    };
+                    let v = parsed.ok_or_else(|| {
                         anyhow!(
                             "{what}: vertex {i}: property {:?} has unparsable value {tok:?}",
                             props[j].0
