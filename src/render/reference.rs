@@ -18,6 +18,8 @@ pub struct ProjectedGaussian {
     pub cov2d: [f64; 3],
     pub opacity: f64,
     pub depth: f64,
+    /// Bound on the float32 rounding error of `depth` (a few ulps of its largest term).
+    pub depth_error: f64,
     pub color: [f64; 3],
 }
 
@@ -202,6 +204,9 @@ pub fn project(
         }
     }
     let color = color.map(|v| (v + 0.5).max(0.0));
+    let r = camera.rotation[2];
+    let magnitude = (0..3).map(|k| (r[k] * m[k]).abs()).sum::<f64>() + camera.translation[2].abs();
+    let depth_error = 4.0 * f32::EPSILON as f64 * magnitude;
     Some(ProjectedGaussian {
         index: i,
         xy,
@@ -209,6 +214,7 @@ pub fn project(
         cov2d: [a, b, c],
         opacity,
         depth: z,
+        depth_error,
         color,
     })
 }
@@ -254,7 +260,7 @@ pub fn render_reference(
             let (mut dsum, mut wsum) = (0.0, 0.0);
             feat.iter_mut().for_each(|v| *v = 0.0);
             let mut ambiguous = false;
-            let mut last_depth: Option<f64> = None;
+            let mut last: Option<&ProjectedGaussian> = None;
             for g in &gs {
                 let dx = g.xy[0] - pixel[0];
                 let dy = g.xy[1] - pixel[1];
@@ -284,12 +290,15 @@ pub fn render_reference(
                 if t_next < 1e-4 {
                     break;
                 }
-                if let Some(ld) = last_depth {
-                    if (g.depth - ld).abs() <= 1e-6 * g.depth {
+                // two contributors whose depths float32 cannot order reliably; identical means are
+                // ordered by index on both sides
+                if let Some(l) = last {
+                    let same_mean = scene.means[l.index] == scene.means[g.index];
+                    if !same_mean && (g.depth - l.depth).abs() <= g.depth_error + l.depth_error {
                         ambiguous = true;
                     }
                 }
-                last_depth = Some(g.depth);
+                last = Some(g);
                 let wgt = alpha * t;
                 for ch in 0..3 {
                     c[ch] += wgt * g.color[ch];
