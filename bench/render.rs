@@ -1,1 +1,118 @@
-fn main() {}
+//! Render benchmark: per-pass GPU times (timestamps) over scene sizes and resolutions.
+//!
+//!   cargo bench --bench render [-- --sizes 100000,1000000,3000000 --resolutions 512x512,1920x1080 --frames 3]
+//!
+//! Prints a table and writes bench/results/render-<device>.json.
+
+#[path = "common.rs"]
+mod common;
+
+use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
+use cogeo::scene::Camera;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+fn main() {
+    let args = common::args();
+    let sizes: Vec<usize> = common::arg(&args, "--sizes")
+        .unwrap_or_else(|| "100000,1000000,3000000".into())
+        .split(',')
+        .map(|s| s.parse().expect("--sizes: comma-separated counts"))
+        .collect();
+    let resolutions: Vec<(u32, u32)> = common::arg(&args, "--resolutions")
+        .unwrap_or_else(|| "512x512,1920x1080".into())
+        .split(',')
+        .map(|r| {
+            let (w, h) = r.split_once('x').expect("--resolutions: WxH,...");
+            (w.parse().unwrap(), h.parse().unwrap())
+        })
+        .collect();
+    let frames: usize = common::arg(&args, "--frames")
+        .map(|f| f.parse().unwrap())
+        .unwrap_or(3);
+    let gpu = common::gpu();
+    println!("device: {}", gpu.info().summary());
+    let mut rows = Vec::new();
+    let mut raster = Rasterizer::new(&gpu).unwrap();
+    for &n in &sizes {
+        let t = Instant::now();
+        let scene = common::synthetic_scene(n, 3, 1);
+        let buffers = SceneBuffers::upload(&gpu, &scene, None).unwrap();
+        drop(scene);
+        println!(
+            "scene: {n} Gaussians, SH degree 3 (generated and uploaded in {:.1} s)",
+            t.elapsed().as_secs_f64()
+        );
+        for &(w, h) in &resolutions {
+            let cam = Camera::look_at(
+                "bench",
+                w,
+                h,
+                60.0,
+                [0.0, -0.5, -5.5],
+                [0.0; 3],
+                [0.0, -1.0, 0.0],
+            );
+            let settings = RenderSettings {
+                timestamps: true,
+                ..Default::default()
+            };
+            raster.render(&buffers, &cam, &settings).unwrap(); // warm-up: allocations, pipeline caches
+            let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+            let mut order: Vec<String> = Vec::new();
+            let mut wall = Vec::new();
+            let mut isect = 0;
+            for _ in 0..frames {
+                let t = Instant::now();
+                let out = raster.render(&buffers, &cam, &settings).unwrap();
+                wall.push(t.elapsed().as_secs_f64() * 1e3);
+                isect = out.num_intersections;
+                for p in out.timings {
+                    if !order.contains(&p.pass) {
+                        order.push(p.pass.clone());
+                    }
+                    per_pass.entry(p.pass).or_default().push(p.ms);
+                }
+            }
+            let passes: Vec<(String, f64)> = order
+                .iter()
+                .map(|p| (p.clone(), common::median(per_pass[p].clone())))
+                .collect();
+            let gpu_total: f64 = passes.iter().map(|p| p.1).sum();
+            let wall_ms = common::median(wall);
+            println!("  {w}x{h}: {isect} intersections, GPU {gpu_total:.1} ms, wall {wall_ms:.1} ms (incl. readback)");
+            for (p, ms) in &passes {
+                println!("      {p:<20} {ms:>10.2} ms");
+            }
+            rows.push(serde_json::json!({
+                "gaussians": n, "width": w, "height": h, "intersections": isect,
+                "gpu_ms": gpu_total, "wall_ms": wall_ms,
+                "passes": passes.iter().map(|(p, ms)| serde_json::json!({"pass": p, "ms": ms})).collect::<Vec<_>>(),
+            }));
+        }
+    }
+    println!("\n| Gaussians | resolution | intersections | project | depth sort | count scan | emit | tile sort | ranges | blend | GPU total ms | wall ms |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for r in &rows {
+        let pass = |name: &str| {
+            r["passes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["pass"] == name)
+                .map(|p| p["ms"].as_f64().unwrap())
+                .unwrap_or(0.0)
+        };
+        println!(
+            "| {} | {}x{} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
+            r["gaussians"], r["width"], r["height"], r["intersections"], pass("project"), pass("depth sort"),
+            pass("tile count scan"), pass("emit intersections"), pass("tile sort"), pass("tile ranges"), pass("blend"),
+            r["gpu_ms"].as_f64().unwrap(), r["wall_ms"].as_f64().unwrap()
+        );
+    }
+    let path = common::results_path(&format!("render-{}.json", common::device_slug(&gpu)));
+    common::write_json(
+        &path,
+        &serde_json::json!({ "device": gpu.info().summary(), "frames": frames, "rows": rows }),
+    );
+}

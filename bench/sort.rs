@@ -1,1 +1,95 @@
-fn main() {}
+//! Sort benchmark: the GPU radix sort of (u32 key, u32 value) pairs against Rust's `sort_unstable`
+//! on the same data.
+//!
+//!   cargo bench --bench sort [-- --sizes 1000000,4000000,16000000 --runs 3]
+//!
+//! Prints a table and writes bench/results/sort-<device>.json.
+
+#[path = "common.rs"]
+mod common;
+
+use cogeo::demo::Rng;
+use cogeo::gpu::{Buffer, MemoryKind, Recorder};
+use cogeo::render::sort::RadixSort;
+use std::time::Instant;
+
+fn main() {
+    let args = common::args();
+    let sizes: Vec<usize> = common::arg(&args, "--sizes")
+        .unwrap_or_else(|| "1000000,4000000,16000000".into())
+        .split(',')
+        .map(|s| s.parse().expect("--sizes: comma-separated counts"))
+        .collect();
+    let runs: usize = common::arg(&args, "--runs")
+        .map(|f| f.parse().unwrap())
+        .unwrap_or(3);
+    let gpu = common::gpu();
+    println!("device: {}", gpu.info().summary());
+    let mut sort = RadixSort::new(&gpu).unwrap();
+    let mut rows = Vec::new();
+    for &n in &sizes {
+        let mut rng = Rng::new(n as u64);
+        let keys: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
+        let values: Vec<u32> = (0..n as u32).collect();
+        sort.reserve(n as u64).unwrap();
+        let k = Buffer::new(&gpu, "keys", n as u64 * 4, MemoryKind::Device).unwrap();
+        let v = Buffer::new(&gpu, "values", n as u64 * 4, MemoryKind::Device).unwrap();
+        let k2 = Buffer::new(&gpu, "keys alt", n as u64 * 4, MemoryKind::Device).unwrap();
+        let v2 = Buffer::new(&gpu, "values alt", n as u64 * 4, MemoryKind::Device).unwrap();
+        let mut gpu_ms = Vec::new();
+        for run in 0..=runs {
+            k.upload(&gpu, &keys).unwrap();
+            v.upload(&gpu, &values).unwrap();
+            let mut rec = Recorder::with_timestamps(&gpu, true).unwrap();
+            let in_alt = sort.record(&mut rec, &k, &v, &k2, &v2, n as u32, 32);
+            assert!(!in_alt, "32-bit keys take an even number of passes");
+            rec.mark("sort");
+            let t = rec.submit_and_wait().unwrap();
+            if run > 0 {
+                gpu_ms.push(t[0].ms); // run 0 warms up
+            }
+        }
+        let sorted: Vec<u32> = k.download(&gpu, n).unwrap();
+        assert!(
+            sorted.windows(2).all(|w| w[0] <= w[1]),
+            "GPU sort output is not sorted"
+        );
+
+        let mut cpu_ms = Vec::new();
+        for _ in 0..runs {
+            let mut pairs: Vec<(u32, u32)> =
+                keys.iter().copied().zip(values.iter().copied()).collect();
+            let t = Instant::now();
+            pairs.sort_unstable_by_key(|p| p.0);
+            cpu_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            assert_eq!(pairs[n / 2].0, sorted[n / 2], "GPU and CPU disagree");
+        }
+        let g = common::median(gpu_ms);
+        let c = common::median(cpu_ms);
+        println!(
+            "{n:>10} pairs: GPU radix {g:>9.2} ms ({:>7.1} Mkeys/s), sort_unstable {c:>9.2} ms ({:>7.1} Mkeys/s), sort_unstable/GPU {:.2}x",
+            n as f64 / g / 1e3,
+            n as f64 / c / 1e3,
+            c / g
+        );
+        rows.push(
+            serde_json::json!({"pairs": n, "gpu_ms": g, "sort_unstable_ms": c, "speedup": c / g}),
+        );
+    }
+    println!("\n| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU |");
+    println!("|---:|---:|---:|---:|");
+    for r in &rows {
+        println!(
+            "| {} | {:.1} | {:.1} | {:.2}x |",
+            r["pairs"],
+            r["gpu_ms"].as_f64().unwrap(),
+            r["sort_unstable_ms"].as_f64().unwrap(),
+            r["speedup"].as_f64().unwrap()
+        );
+    }
+    let path = common::results_path(&format!("sort-{}.json", common::device_slug(&gpu)));
+    common::write_json(
+        &path,
+        &serde_json::json!({ "device": gpu.info().summary(), "runs": runs, "rows": rows }),
+    );
+}

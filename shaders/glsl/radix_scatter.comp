@@ -10,6 +10,7 @@ layout(local_size_x = 256) in;
 shared uint s_counts[RADIX * SORT_THREADS];
 shared uint s_sums[SORT_THREADS];
 shared uint s_global[RADIX];
+shared uint s_digit_base[RADIX];
 
 void main() {
     uint block = linear_group_id();
@@ -41,16 +42,18 @@ void main() {
     }
     barrier();
 
-    uint base[RADIX];
-    for (uint d = 0; d < RADIX; d++)
-        base[d] = s_global[d] + s_counts[d * SORT_THREADS + t] - s_counts[d * SORT_THREADS];
+    // s_counts[d * 256 + t] becomes run t's next output slot for digit d, relative to s_digit_base[d]
+    if (t < RADIX) s_digit_base[t] = s_global[t] - s_counts[t * SORT_THREADS];
+    barrier();
     uint first = block * BLOCK_KEYS + t * ITEMS;
     for (uint i = 0; i < ITEMS; i++) {
         uint idx = first + i;
         if (idx >= n) break;
         uint key = keys_in.v[idx];
         uint d = digit_of(key);
-        uint dst = base[d]++;
+        uint slot = s_counts[d * SORT_THREADS + t];
+        s_counts[d * SORT_THREADS + t] = slot + 1;  // only this thread touches column t
+        uint dst = s_digit_base[d] + slot;
         keys_out.v[dst] = key;
         values_out.v[dst] = values_in.v[idx];
     }

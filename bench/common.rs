@@ -1,0 +1,93 @@
+//! Shared pieces of the benchmarks: argument handling, synthetic scenes, result files.
+#![allow(dead_code)]
+
+use cogeo::demo::Rng;
+use cogeo::gpu::{DeviceChoice, Gpu};
+use cogeo::scene::GaussianScene;
+use std::path::PathBuf;
+
+/// Arguments after `cargo bench --bench NAME --`; cargo's own `--bench` flag is ignored.
+pub fn args() -> Vec<String> {
+    std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect()
+}
+
+/// Value of `--name value` among the arguments.
+pub fn arg(args: &[String], name: &str) -> Option<String> {
+    args.iter()
+        .position(|a| a == name)
+        .and_then(|i| args.get(i + 1).cloned())
+}
+
+pub fn gpu() -> Gpu {
+    Gpu::new(&DeviceChoice::from_env(None)).expect("cannot create the Vulkan context")
+}
+
+/// `n` random Gaussians of SH degree `degree` filling a 4x4x4 box, sized so that neighbours overlap
+/// about as much as in trained scenes (sigma ~ 0.6 x mean spacing).
+pub fn synthetic_scene(n: usize, degree: u32, seed: u64) -> GaussianScene {
+    let mut rng = Rng::new(seed);
+    let k = ((degree + 1) * (degree + 1)) as usize;
+    let spacing = 4.0 / (n as f64).cbrt();
+    let mut s = GaussianScene {
+        sh_degree: degree,
+        ..Default::default()
+    };
+    s.means.reserve(n);
+    s.sh.reserve(n * k * 3);
+    for _ in 0..n {
+        s.means.push([
+            rng.range(-2.0, 2.0) as f32,
+            rng.range(-2.0, 2.0) as f32,
+            rng.range(-2.0, 2.0) as f32,
+        ]);
+        s.normals.push([0.0; 3]);
+        let base = (0.6 * spacing).ln();
+        s.log_scales
+            .push([0, 1, 2].map(|_| (base + 0.4 * rng.normal()) as f32));
+        s.quats.push([0, 1, 2, 3].map(|_| rng.normal() as f32));
+        s.opacity_logits.push((1.5 * rng.normal()) as f32);
+        for b in 0..k {
+            for _ in 0..3 {
+                s.sh.push((if b == 0 { 1.0 } else { 0.2 } * rng.normal()) as f32);
+            }
+        }
+    }
+    s
+}
+
+pub fn results_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("bench")
+        .join("results")
+        .join(name)
+}
+
+/// File-name-safe short name of the device ("llvmpipe", "nvidia-h100", ...).
+pub fn device_slug(gpu: &Gpu) -> String {
+    let name = gpu.info().name.to_lowercase();
+    let first: String = name
+        .split(|c: char| !c.is_ascii_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .take(3)
+        .collect::<Vec<_>>()
+        .join("-");
+    first
+}
+
+pub fn write_json(path: &std::path::Path, value: &serde_json::Value) {
+    let text = serde_json::to_string_pretty(value).unwrap();
+    cogeo::io::write_atomic(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(Into::into)
+    })
+    .unwrap();
+    println!("wrote {}", path.display());
+}
+
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    v[v.len() / 2]
+}
