@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# The main job on built-in data: renders the built-in default scene from an orbit of cameras into
+# demo_out/. Installs what is missing first (scripts/setup.sh). Extra arguments go to `cogeo demo`.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+bash scripts/setup.sh
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
+cargo run --release --quiet -- demo "$@"
