@@ -176,3 +176,33 @@ fn scene_beyond_the_128_mib_binding_limit_renders_exactly() {
     assert!(lit > hw / 2);
     assert!(max_err <= 1e-4, "max error {max_err:.3e}");
 }
+
+#[test]
+fn out_of_memory_is_a_clear_error_naming_sizes() {
+    use cogeo::gpu::{Buffer, MemoryKind};
+    let g = gpu();
+    let too_big = g
+        .info()
+        .max_memory_allocation
+        .max(g.info().device_local_memory)
+        * 4;
+    let err = match Buffer::new(&g, "sh", too_big, MemoryKind::Device) {
+        Ok(_) => panic!("allocating {too_big} bytes should fail"),
+        Err(e) => format!("{e:#}"),
+    };
+    assert!(err.contains("MiB") && err.contains(&g.info().name), "{err}");
+    // the context is still usable afterwards
+    let scene = random_scene(
+        3,
+        0,
+        SceneMix {
+            normal: 10,
+            ..Default::default()
+        },
+    );
+    let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
+    Rasterizer::new(&g)
+        .unwrap()
+        .render(&buffers, &test_camera(20, 20), &RenderSettings::default())
+        .unwrap();
+}
