@@ -8,17 +8,12 @@ use std::path::PathBuf;
 
 /// Arguments after `cargo bench --bench NAME --`; cargo's own `--bench` flag is ignored.
 pub fn args() -> Vec<String> {
-    std::env::args()
-        .skip(1)
-        .filter(|a| a != "--bench")
-        .collect()
+    std::env::args().skip(1).filter(|a| a != "--bench").collect()
 }
 
 /// Value of `--name value` among the arguments.
 pub fn arg(args: &[String], name: &str) -> Option<String> {
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1).cloned())
+    args.iter().position(|a| a == name).and_then(|i| args.get(i + 1).cloned())
 }
 
 pub fn gpu() -> Gpu {
@@ -31,22 +26,14 @@ pub fn synthetic_scene(n: usize, degree: u32, seed: u64) -> GaussianScene {
     let mut rng = Rng::new(seed);
     let k = ((degree + 1) * (degree + 1)) as usize;
     let spacing = 4.0 / (n as f64).cbrt();
-    let mut s = GaussianScene {
-        sh_degree: degree,
-        ..Default::default()
-    };
+    let mut s = GaussianScene { sh_degree: degree, ..Default::default() };
     s.means.reserve(n);
     s.sh.reserve(n * k * 3);
     for _ in 0..n {
-        s.means.push([
-            rng.range(-2.0, 2.0) as f32,
-            rng.range(-2.0, 2.0) as f32,
-            rng.range(-2.0, 2.0) as f32,
-        ]);
+        s.means.push([rng.range(-2.0, 2.0) as f32, rng.range(-2.0, 2.0) as f32, rng.range(-2.0, 2.0) as f32]);
         s.normals.push([0.0; 3]);
         let base = (0.6 * spacing).ln();
-        s.log_scales
-            .push([0, 1, 2].map(|_| (base + 0.4 * rng.normal()) as f32));
+        s.log_scales.push([0, 1, 2].map(|_| (base + 0.4 * rng.normal()) as f32));
         s.quats.push([0, 1, 2, 3].map(|_| rng.normal() as f32));
         s.opacity_logits.push((1.5 * rng.normal()) as f32);
         for b in 0..k {
@@ -59,10 +46,7 @@ pub fn synthetic_scene(n: usize, degree: u32, seed: u64) -> GaussianScene {
 }
 
 pub fn results_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("bench")
-        .join("results")
-        .join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench").join("results").join(name)
 }
 
 /// File-name-safe short name of the device ("llvmpipe", "nvidia-h100", ...).

@@ -27,9 +27,7 @@ fn main() {
             (w.parse().unwrap(), h.parse().unwrap())
         })
         .collect();
-    let frames: usize = common::arg(&args, "--frames")
-        .map(|f| f.parse().unwrap())
-        .unwrap_or(3);
+    let frames: usize = common::arg(&args, "--frames").map(|f| f.parse().unwrap()).unwrap_or(3);
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());
     let mut rows = Vec::new();
@@ -39,24 +37,10 @@ fn main() {
         let scene = common::synthetic_scene(n, 3, 1);
         let buffers = SceneBuffers::upload(&gpu, &scene, None).unwrap();
         drop(scene);
-        println!(
-            "scene: {n} Gaussians, SH degree 3 (generated and uploaded in {:.1} s)",
-            t.elapsed().as_secs_f64()
-        );
+        println!("scene: {n} Gaussians, SH degree 3 (generated and uploaded in {:.1} s)", t.elapsed().as_secs_f64());
         for &(w, h) in &resolutions {
-            let cam = Camera::look_at(
-                "bench",
-                w,
-                h,
-                60.0,
-                [0.0, -0.5, -5.5],
-                [0.0; 3],
-                [0.0, -1.0, 0.0],
-            );
-            let settings = RenderSettings {
-                timestamps: true,
-                ..Default::default()
-            };
+            let cam = Camera::look_at("bench", w, h, 60.0, [0.0, -0.5, -5.5], [0.0; 3], [0.0, -1.0, 0.0]);
+            let settings = RenderSettings { timestamps: true, ..Default::default() };
             raster.render(&buffers, &cam, &settings).unwrap(); // warm-up: allocations, pipeline caches
             let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
             let mut order: Vec<String> = Vec::new();
@@ -74,10 +58,8 @@ fn main() {
                     per_pass.entry(p.pass).or_default().push(p.ms);
                 }
             }
-            let passes: Vec<(String, f64)> = order
-                .iter()
-                .map(|p| (p.clone(), common::median(per_pass[p].clone())))
-                .collect();
+            let passes: Vec<(String, f64)> =
+                order.iter().map(|p| (p.clone(), common::median(per_pass[p].clone()))).collect();
             let gpu_total: f64 = passes.iter().map(|p| p.1).sum();
             let wall_ms = common::median(wall);
             println!("  {w}x{h}: {isect} intersections, GPU {gpu_total:.1} ms, wall {wall_ms:.1} ms (incl. readback)");
@@ -105,14 +87,21 @@ fn main() {
         };
         println!(
             "| {} | {}x{} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
-            r["gaussians"], r["width"], r["height"], r["intersections"], pass("project"), pass("depth sort"),
-            pass("tile count scan"), pass("emit intersections"), pass("tile sort"), pass("tile ranges"), pass("blend"),
-            r["gpu_ms"].as_f64().unwrap(), r["wall_ms"].as_f64().unwrap()
+            r["gaussians"],
+            r["width"],
+            r["height"],
+            r["intersections"],
+            pass("project"),
+            pass("depth sort"),
+            pass("tile count scan"),
+            pass("emit intersections"),
+            pass("tile sort"),
+            pass("tile ranges"),
+            pass("blend"),
+            r["gpu_ms"].as_f64().unwrap(),
+            r["wall_ms"].as_f64().unwrap()
         );
     }
     let path = common::results_path(&format!("render-{}.json", common::device_slug(&gpu)));
-    common::write_json(
-        &path,
-        &serde_json::json!({ "device": gpu.info().summary(), "frames": frames, "rows": rows }),
-    );
+    common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "frames": frames, "rows": rows }));
 }

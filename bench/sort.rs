@@ -20,9 +20,7 @@ fn main() {
         .split(',')
         .map(|s| s.parse().expect("--sizes: comma-separated counts"))
         .collect();
-    let runs: usize = common::arg(&args, "--runs")
-        .map(|f| f.parse().unwrap())
-        .unwrap_or(3);
+    let runs: usize = common::arg(&args, "--runs").map(|f| f.parse().unwrap()).unwrap_or(3);
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());
     let mut sort = RadixSort::new(&gpu).unwrap();
@@ -50,15 +48,11 @@ fn main() {
             }
         }
         let sorted: Vec<u32> = k.download(&gpu, n).unwrap();
-        assert!(
-            sorted.windows(2).all(|w| w[0] <= w[1]),
-            "GPU sort output is not sorted"
-        );
+        assert!(sorted.windows(2).all(|w| w[0] <= w[1]), "GPU sort output is not sorted");
 
         let mut cpu_ms = Vec::new();
         for _ in 0..runs {
-            let mut pairs: Vec<(u32, u32)> =
-                keys.iter().copied().zip(values.iter().copied()).collect();
+            let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(values.iter().copied()).collect();
             let t = Instant::now();
             pairs.sort_unstable_by_key(|p| p.0);
             cpu_ms.push(t.elapsed().as_secs_f64() * 1e3);
@@ -72,9 +66,7 @@ fn main() {
             n as f64 / c / 1e3,
             c / g
         );
-        rows.push(
-            serde_json::json!({"pairs": n, "gpu_ms": g, "sort_unstable_ms": c, "speedup": c / g}),
-        );
+        rows.push(serde_json::json!({"pairs": n, "gpu_ms": g, "sort_unstable_ms": c, "speedup": c / g}));
     }
     println!("\n| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU |");
     println!("|---:|---:|---:|---:|");
@@ -88,8 +80,5 @@ fn main() {
         );
     }
     let path = common::results_path(&format!("sort-{}.json", common::device_slug(&gpu)));
-    common::write_json(
-        &path,
-        &serde_json::json!({ "device": gpu.info().summary(), "runs": runs, "rows": rows }),
-    );
+    common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "runs": runs, "rows": rows }));
 }

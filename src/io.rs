@@ -6,28 +6,20 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
 /// Writes through `body` into a temporary file, syncs it and renames it onto `path`.
-pub fn write_atomic(
-    path: &Path,
-    body: impl FnOnce(&mut BufWriter<std::fs::File>) -> Result<()>,
-) -> Result<()> {
+pub fn write_atomic(path: &Path, body: impl FnOnce(&mut BufWriter<std::fs::File>) -> Result<()>) -> Result<()> {
     let tmp = temp_path(path);
     let result = (|| -> Result<()> {
-        let file = std::fs::File::create(&tmp)
-            .with_context(|| format!("{}: cannot create", tmp.display()))?;
+        let file = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
         let mut w = BufWriter::with_capacity(1 << 20, file);
         body(&mut w)?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
-        std::fs::rename(&tmp, path)
-            .with_context(|| format!("{}: cannot move into place", path.display()))?;
+        std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot move into place", path.display()))?;
         Ok(())
     })();
     if result.is_err() {
@@ -60,16 +52,9 @@ pub fn write_png_gray(path: &Path, width: u32, height: u32, values: &[f32]) -> R
     write_png(path, width, height, image::ColorType::L8, &pixels)
 }
 
-pub fn write_png(
-    path: &Path,
-    width: u32,
-    height: u32,
-    color: image::ColorType,
-    pixels: &[u8],
-) -> Result<()> {
+pub fn write_png(path: &Path, width: u32, height: u32, color: image::ColorType, pixels: &[u8]) -> Result<()> {
     write_atomic(path, |w| {
-        image::write_buffer_with_format(w, pixels, width, height, color, image::ImageFormat::Png)
-            .map_err(Into::into)
+        image::write_buffer_with_format(w, pixels, width, height, color, image::ImageFormat::Png).map_err(Into::into)
     })
 }
 
@@ -77,24 +62,14 @@ pub fn write_png(
 pub fn write_exr(path: &Path, width: u32, height: u32, channels: &[(&str, &[f32])]) -> Result<()> {
     use exr::prelude::*;
     let size = Vec2(width as usize, height as usize);
-    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
-        .iter()
-        .map(|(name, data)| AnyChannel::new(*name, FlatSamples::F32(data.to_vec())))
-        .collect();
-    let layer = Layer::new(
-        size,
-        LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
-        AnyChannels::sort(list),
-    );
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> =
+        channels.iter().map(|(name, data)| AnyChannel::new(*name, FlatSamples::F32(data.to_vec()))).collect();
+    let layer = Layer::new(size, LayerAttributes::default(), Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
     let image = Image::from_layer(layer);
     write_atomic(path, |w| {
         // exr needs Seek; buffer in memory first
         let mut cursor = std::io::Cursor::new(Vec::new());
-        image
-            .write()
-            .to_buffered(&mut cursor)
-            .map_err(|e| anyhow::anyhow!("EXR encoding failed: {e}"))?;
+        image.write().to_buffered(&mut cursor).map_err(|e| anyhow::anyhow!("EXR encoding failed: {e}"))?;
         w.write_all(cursor.get_ref())?;
         Ok(())
     })
@@ -103,18 +78,10 @@ pub fn write_exr(path: &Path, width: u32, height: u32, channels: &[(&str, &[f32]
 /// Reads a single float channel from an EXR (the first channel, or the one named `name`).
 pub fn read_exr_channel(path: &Path, name: Option<&str>) -> Result<(u32, u32, Vec<f32>)> {
     use exr::prelude::*;
-    let image = read_all_flat_layers_from_file(path)
-        .with_context(|| format!("{}: cannot read EXR", path.display()))?;
-    let layer = image
-        .layer_data
-        .first()
-        .ok_or_else(|| anyhow::anyhow!("{}: EXR without layers", path.display()))?;
+    let image = read_all_flat_layers_from_file(path).with_context(|| format!("{}: cannot read EXR", path.display()))?;
+    let layer = image.layer_data.first().ok_or_else(|| anyhow::anyhow!("{}: EXR without layers", path.display()))?;
     let channel = match name {
-        Some(n) => layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.to_string() == n),
+        Some(n) => layer.channel_data.list.iter().find(|c| c.name.to_string() == n),
         None => layer.channel_data.list.first(),
     }
     .ok_or_else(|| anyhow::anyhow!("{}: EXR channel not found", path.display()))?;

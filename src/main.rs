@@ -108,9 +108,7 @@ fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
         .collect::<Result<_, _>>()
         .map_err(|_| format!("expected r,g,b numbers, got {s:?}"))?;
     if v.len() != 3 || v.iter().any(|c| !(0.0..=1.0).contains(c)) {
-        return Err(format!(
-            "expected three values in [0, 1] as r,g,b, got {s:?}"
-        ));
+        return Err(format!("expected three values in [0, 1] as r,g,b, got {s:?}"));
     }
     Ok([v[0], v[1], v[2]])
 }
@@ -118,11 +116,9 @@ fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
 fn progress(len: usize, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);
     bar.set_style(
-        ProgressStyle::with_template(
-            "{msg:>10} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}",
-        )
-        .unwrap()
-        .progress_chars("=> "),
+        ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} {elapsed_precise} eta {eta}")
+            .unwrap()
+            .progress_chars("=> "),
     );
     bar.set_message(what.to_string());
     bar
@@ -138,11 +134,7 @@ fn load_scene(path: &Path) -> Result<GaussianScene> {
     Ok(scene)
 }
 
-fn resize_cameras(
-    cameras: Vec<Camera>,
-    width: Option<u32>,
-    height: Option<u32>,
-) -> Result<Vec<Camera>> {
+fn resize_cameras(cameras: Vec<Camera>, width: Option<u32>, height: Option<u32>) -> Result<Vec<Camera>> {
     if width == Some(0) || height == Some(0) {
         bail!("--width and --height must be positive");
     }
@@ -175,72 +167,32 @@ fn render_views(
     print_timings: bool,
 ) -> Result<()> {
     let features = if settings.features {
-        Some(
-            scene
-                .feature_matrix("f_obj_")
-                .ok_or_else(|| anyhow!("--features: the scene has no f_obj_* properties"))?,
-        )
+        Some(scene.feature_matrix("f_obj_").ok_or_else(|| anyhow!("--features: the scene has no f_obj_* properties"))?)
     } else {
         None
     };
-    let buffers = SceneBuffers::upload(
-        gpu,
-        scene,
-        features.as_ref().map(|(f, d)| (f.as_slice(), *d)),
-    )?;
+    let buffers = SceneBuffers::upload(gpu, scene, features.as_ref().map(|(f, d)| (f.as_slice(), *d)))?;
     let mut raster = Rasterizer::new(gpu)?;
     let bar = progress(cameras.len(), "render");
     for cam in cameras {
         let r = raster.render(&buffers, cam, settings)?;
-        write_png_rgb(
-            &out.join(format!("{}.png", cam.name)),
-            r.width,
-            r.height,
-            &r.rgb,
-        )?;
+        write_png_rgb(&out.join(format!("{}.png", cam.name)), r.width, r.height, &r.rgb)?;
         if alpha {
-            write_png_gray(
-                &out.join(format!("{}_alpha.png", cam.name)),
-                r.width,
-                r.height,
-                &r.alpha,
-            )?;
+            write_png_gray(&out.join(format!("{}_alpha.png", cam.name)), r.width, r.height, &r.alpha)?;
         }
         if depth {
-            write_exr(
-                &out.join(format!("{}_depth.exr", cam.name)),
-                r.width,
-                r.height,
-                &[("Y", &r.expected_depth)],
-            )?;
+            write_exr(&out.join(format!("{}_depth.exr", cam.name)), r.width, r.height, &[("Y", &r.expected_depth)])?;
         }
         if r.feature_dim > 0 {
             let hw = (r.width * r.height) as usize;
             let names: Vec<String> = (0..r.feature_dim).map(|c| format!("f{c:02}")).collect();
-            let channels: Vec<(&str, &[f32])> = names
-                .iter()
-                .enumerate()
-                .map(|(c, n)| (n.as_str(), &r.features[c * hw..(c + 1) * hw]))
-                .collect();
-            write_exr(
-                &out.join(format!("{}_features.exr", cam.name)),
-                r.width,
-                r.height,
-                &channels,
-            )?;
+            let channels: Vec<(&str, &[f32])> =
+                names.iter().enumerate().map(|(c, n)| (n.as_str(), &r.features[c * hw..(c + 1) * hw])).collect();
+            write_exr(&out.join(format!("{}_features.exr", cam.name)), r.width, r.height, &channels)?;
         }
         if print_timings {
-            let parts: Vec<String> = r
-                .timings
-                .iter()
-                .map(|t| format!("{} {:.2} ms", t.pass, t.ms))
-                .collect();
-            bar.println(format!(
-                "{}: {} intersections; {}",
-                cam.name,
-                r.num_intersections,
-                parts.join(", ")
-            ));
+            let parts: Vec<String> = r.timings.iter().map(|t| format!("{} {:.2} ms", t.pass, t.ms)).collect();
+            bar.println(format!("{}: {} intersections; {}", cam.name, r.num_intersections, parts.join(", ")));
         }
         bar.inc(1);
     }
@@ -263,17 +215,13 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     };
     let cameras = resize_cameras(cameras, a.width, a.height)?;
     if a.features && scene.feature_matrix("f_obj_").is_none() {
-        bail!(
-            "{}: --features needs f_obj_* properties in the scene (run `cogeo tag` first)",
-            a.scene.display()
-        );
+        bail!("{}: --features needs f_obj_* properties in the scene (run `cogeo tag` first)", a.scene.display());
     }
     if !(a.near > 0.0) {
         bail!("--near must be positive");
     }
     let gpu = open_gpu(&a.device)?;
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
     let settings = RenderSettings {
         background: a.background,
         near: a.near,
@@ -281,9 +229,7 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         features: a.features,
         timestamps: a.timings,
     };
-    render_views(
-        &gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings,
-    )?;
+    render_views(&gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings)?;
     eprintln!("wrote {} view(s) to {}", cameras.len(), a.out.display());
     Ok(())
 }
@@ -296,18 +242,11 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
     eprintln!("device: {}", gpu.info().summary());
     let scene = cogeo::demo::default_scene();
     let cameras = cogeo::demo::orbit_cameras(a.views, a.width, a.height);
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
     ply::write_ply(&scene, &a.out.join("scene.ply"))?;
     camera::write_cameras_json(&cameras, &a.out.join("cameras.json"))?;
-    let settings = RenderSettings {
-        background: [1.0, 1.0, 1.0],
-        timestamps: true,
-        ..Default::default()
-    };
-    render_views(
-        &gpu, &scene, &cameras, &a.out, &settings, true, false, false,
-    )?;
+    let settings = RenderSettings { background: [1.0, 1.0, 1.0], timestamps: true, ..Default::default() };
+    render_views(&gpu, &scene, &cameras, &a.out, &settings, true, false, false)?;
     eprintln!(
         "rendered the built-in scene ({} Gaussians) from {} views into {} (scene.ply, cameras.json, view_*.png, view_*_depth.exr)",
         scene.len(),

@@ -22,17 +22,11 @@ fn tempdir(name: &str) -> PathBuf {
 fn cogeo(args: &[&str]) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_cogeo"))
         .args(args)
-        .env(
-            "COGEO_VALIDATE",
-            std::env::var("COGEO_VALIDATE").unwrap_or_else(|_| "1".into()),
-        )
+        .env("COGEO_VALIDATE", std::env::var("COGEO_VALIDATE").unwrap_or_else(|_| "1".into()))
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(
-        !stderr.contains("vulkan validation:"),
-        "validation messages:\n{stderr}"
-    );
+    assert!(!stderr.contains("vulkan validation:"), "validation messages:\n{stderr}");
     (out.status.code().unwrap_or(-1), stderr)
 }
 
@@ -48,15 +42,7 @@ fn render_writes_png_depth_and_alpha_that_match_the_reference() {
     write_ply(&scene, &scene_path).unwrap();
     let mut cam_a = test_camera(70, 45);
     cam_a.name = "a".into();
-    let mut cam_b = Camera::look_at(
-        "b",
-        50,
-        40,
-        50.0,
-        [1.0, -0.5, -4.0],
-        [0.0; 3],
-        [0.0, -1.0, 0.0],
-    );
+    let mut cam_b = Camera::look_at("b", 50, 40, 50.0, [1.0, -0.5, -4.0], [0.0; 3], [0.0, -1.0, 0.0]);
     cam_b.cx = 25.0;
     cam_b.cy = 20.0;
     let cams_path = dir.join("cameras.json");
@@ -76,14 +62,7 @@ fn render_writes_png_depth_and_alpha_that_match_the_reference() {
         "0.2,0.4,0.6",
     ]);
     assert_eq!(code, 0, "{err}");
-    for f in [
-        "a.png",
-        "b.png",
-        "a_depth.exr",
-        "a_alpha.png",
-        "b_alpha.png",
-        "b_depth.exr",
-    ] {
+    for f in ["a.png", "b.png", "a_depth.exr", "a_alpha.png", "b_alpha.png", "b_depth.exr"] {
         assert!(out.join(f).exists(), "{f} missing");
     }
     // the PNG holds the rendered colors, rounded to 8 bits
@@ -100,47 +79,20 @@ fn render_writes_png_depth_and_alpha_that_match_the_reference() {
             }
         }
     }
-    assert!(
-        off <= 3,
-        "{off} PNG samples differ from the reference by more than one level"
-    );
+    assert!(off <= 3, "{off} PNG samples differ from the reference by more than one level");
     let (w, h, depth) = cogeo::io::read_exr_channel(&out.join("a_depth.exr"), None).unwrap();
     assert_eq!((w, h), (70, 45));
-    let i = (0..hw)
-        .filter(|&i| !reference.ambiguous[i] && reference.alpha[i] > 0.5)
-        .next()
-        .unwrap();
-    assert!(
-        (depth[i] as f64 - reference.expected_depth[i]).abs() <= 1e-4 * reference.expected_depth[i]
-    );
+    let i = (0..hw).filter(|&i| !reference.ambiguous[i] && reference.alpha[i] > 0.5).next().unwrap();
+    assert!((depth[i] as f64 - reference.expected_depth[i]).abs() <= 1e-4 * reference.expected_depth[i]);
     // no temporary files left behind
-    assert!(std::fs::read_dir(&out).unwrap().all(|e| !e
-        .unwrap()
-        .file_name()
-        .to_string_lossy()
-        .ends_with(".tmp")));
+    assert!(std::fs::read_dir(&out).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
 
     // --width alone keeps the aspect ratio and scales intrinsics
     let out2 = dir.join("out2");
-    let (code, err) = cogeo(&[
-        "render",
-        "--scene",
-        s(&scene_path),
-        "--cameras",
-        s(&cams_path),
-        "--out",
-        s(&out2),
-        "--width",
-        "140",
-    ]);
+    let (code, err) =
+        cogeo(&["render", "--scene", s(&scene_path), "--cameras", s(&cams_path), "--out", s(&out2), "--width", "140"]);
     assert_eq!(code, 0, "{err}");
-    assert_eq!(
-        image::open(out2.join("a.png"))
-            .unwrap()
-            .to_rgb8()
-            .dimensions(),
-        (140, 90)
-    );
+    assert_eq!(image::open(out2.join("a.png")).unwrap().to_rgb8().dimensions(), (140, 90));
 }
 
 /// Runs a render that must fail; checks a one-line error naming `needle` and an untouched --out.
@@ -149,44 +101,22 @@ fn expect_failure(args: &[&str], out: &Path, needle: &str) {
     assert_ne!(code, 0, "expected failure for {args:?}");
     let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
     let last = lines.last().copied().unwrap_or("");
-    assert!(
-        last.starts_with("error: ") && last.contains(needle),
-        "unexpected error output for {args:?}:\n{err}"
-    );
-    assert!(
-        !out.exists() || std::fs::read_dir(out).unwrap().next().is_none(),
-        "{} was written to",
-        out.display()
-    );
+    assert!(last.starts_with("error: ") && last.contains(needle), "unexpected error output for {args:?}:\n{err}");
+    assert!(!out.exists() || std::fs::read_dir(out).unwrap().next().is_none(), "{} was written to", out.display());
 }
 
 #[test]
 fn bad_inputs_fail_with_one_clear_line_and_write_nothing() {
     let dir = tempdir("bad");
     let out = dir.join("out");
-    let good = random_scene(
-        1,
-        1,
-        SceneMix {
-            normal: 30,
-            ..Default::default()
-        },
-    );
+    let good = random_scene(1, 1, SceneMix { normal: 30, ..Default::default() });
     let good_path = dir.join("good.ply");
     write_ply(&good, &good_path).unwrap();
     let cams = dir.join("cameras.json");
     write_cameras_json(&[test_camera(32, 32)], &cams).unwrap();
 
     expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&dir.join("missing.ply")),
-            "--cameras",
-            s(&cams),
-            "--out",
-            s(&out),
-        ],
+        &["render", "--scene", s(&dir.join("missing.ply")), "--cameras", s(&cams), "--out", s(&out)],
         &out,
         "missing.ply",
     );
@@ -194,19 +124,7 @@ fn bad_inputs_fail_with_one_clear_line_and_write_nothing() {
     let bytes = encode_ply(&good);
     let truncated = dir.join("truncated.ply");
     std::fs::write(&truncated, &bytes[..bytes.len() - 100]).unwrap();
-    expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&truncated),
-            "--cameras",
-            s(&cams),
-            "--out",
-            s(&out),
-        ],
-        &out,
-        "truncated",
-    );
+    expect_failure(&["render", "--scene", s(&truncated), "--cameras", s(&cams), "--out", s(&out)], &out, "truncated");
 
     let malformed = dir.join("malformed.ply");
     std::fs::write(
@@ -215,15 +133,7 @@ fn bad_inputs_fail_with_one_clear_line_and_write_nothing() {
     )
     .unwrap();
     expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&malformed),
-            "--cameras",
-            s(&cams),
-            "--out",
-            s(&out),
-        ],
+        &["render", "--scene", s(&malformed), "--cameras", s(&cams), "--out", s(&out)],
         &out,
         "malformed.ply",
     );
@@ -232,115 +142,46 @@ fn bad_inputs_fail_with_one_clear_line_and_write_nothing() {
     nan.means[3][0] = f32::NAN;
     let nan_path = dir.join("nan.ply");
     write_ply(&nan, &nan_path).unwrap();
-    expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&nan_path),
-            "--cameras",
-            s(&cams),
-            "--out",
-            s(&out),
-        ],
-        &out,
-        "NaN",
-    );
+    expect_failure(&["render", "--scene", s(&nan_path), "--cameras", s(&cams), "--out", s(&out)], &out, "NaN");
 
     let mut zq = good.clone();
     zq.quats[0] = [0.0; 4];
     let zq_path = dir.join("zq.ply");
     write_ply(&zq, &zq_path).unwrap();
-    expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&zq_path),
-            "--cameras",
-            s(&cams),
-            "--out",
-            s(&out),
-        ],
-        &out,
-        "zero-norm",
-    );
+    expect_failure(&["render", "--scene", s(&zq_path), "--cameras", s(&cams), "--out", s(&out)], &out, "zero-norm");
 
     let empty_path = dir.join("empty.ply");
     write_ply(&GaussianScene::default(), &empty_path).unwrap();
     expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&empty_path),
-            "--cameras",
-            s(&cams),
-            "--out",
-            s(&out),
-        ],
+        &["render", "--scene", s(&empty_path), "--cameras", s(&cams), "--out", s(&out)],
         &out,
         "no Gaussians",
     );
 
     let colmap = dir.join("colmap");
     std::fs::create_dir_all(&colmap).unwrap();
-    std::fs::write(
-        colmap.join("cameras.txt"),
-        "1 EQUIRECTANGULAR 100 80 50 50 40\n",
-    )
-    .unwrap();
+    std::fs::write(colmap.join("cameras.txt"), "1 EQUIRECTANGULAR 100 80 50 50 40\n").unwrap();
     std::fs::write(colmap.join("images.txt"), "1 1 0 0 0 0 0 4 1 a.png\n\n").unwrap();
     expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&good_path),
-            "--colmap",
-            s(&colmap),
-            "--out",
-            s(&out),
-        ],
+        &["render", "--scene", s(&good_path), "--colmap", s(&colmap), "--out", s(&out)],
         &out,
         "EQUIRECTANGULAR",
     );
 
     expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&good_path),
-            "--cameras",
-            s(&dir.join("nope.json")),
-            "--out",
-            s(&out),
-        ],
+        &["render", "--scene", s(&good_path), "--cameras", s(&dir.join("nope.json")), "--out", s(&out)],
         &out,
         "nope.json",
     );
     let bad_json = dir.join("bad.json");
     std::fs::write(&bad_json, "{\"not\": \"a list\"}").unwrap();
     expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&good_path),
-            "--cameras",
-            s(&bad_json),
-            "--out",
-            s(&out),
-        ],
+        &["render", "--scene", s(&good_path), "--cameras", s(&bad_json), "--out", s(&out)],
         &out,
         "bad.json",
     );
     expect_failure(
-        &[
-            "render",
-            "--scene",
-            s(&good_path),
-            "--cameras",
-            s(&cams),
-            "--out",
-            s(&out),
-            "--features",
-        ],
+        &["render", "--scene", s(&good_path), "--cameras", s(&cams), "--out", s(&out), "--features"],
         &out,
         "f_obj",
     );
@@ -350,17 +191,7 @@ fn bad_inputs_fail_with_one_clear_line_and_write_nothing() {
 fn cameras_json_round_trip() {
     let dir = tempdir("json");
     let cams: Vec<Camera> = (0..3)
-        .map(|i| {
-            Camera::look_at(
-                &format!("c{i}"),
-                64 + i,
-                48,
-                55.0,
-                [i as f64, 0.5, -3.0],
-                [0.0; 3],
-                [0.0, -1.0, 0.0],
-            )
-        })
+        .map(|i| Camera::look_at(&format!("c{i}"), 64 + i, 48, 55.0, [i as f64, 0.5, -3.0], [0.0; 3], [0.0, -1.0, 0.0]))
         .collect();
     write_cameras_json(&cams, &dir.join("cameras.json")).unwrap();
     let back = read_cameras_json(&dir.join("cameras.json")).unwrap();
@@ -411,14 +242,7 @@ fn colmap_binary_and_text_agree() {
     let mut im = Vec::new();
     im.extend(2u64.to_le_bytes());
     for (id, q, t, cam, name, npts) in [
-        (
-            2i32,
-            [0.9, 0.1, 0.2, 0.3],
-            [1.0, 2.0, 3.0],
-            2i32,
-            "b.jpg",
-            1u64,
-        ),
+        (2i32, [0.9, 0.1, 0.2, 0.3], [1.0, 2.0, 3.0], 2i32, "b.jpg", 1u64),
         (1, [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 5.0], 1, "a.jpg", 0),
     ] {
         im.extend(id.to_le_bytes());
@@ -438,9 +262,7 @@ fn colmap_binary_and_text_agree() {
     let mut pts = Vec::new();
     pts.extend(1u64.to_le_bytes());
     pts.extend(1u64.to_le_bytes());
-    [0.5f64, 0.25, 3.0]
-        .iter()
-        .for_each(|v| pts.extend(v.to_le_bytes()));
+    [0.5f64, 0.25, 3.0].iter().for_each(|v| pts.extend(v.to_le_bytes()));
     pts.extend([255u8, 128, 0]);
     pts.extend(0.1f64.to_le_bytes());
     pts.extend(1u64.to_le_bytes());
@@ -453,15 +275,8 @@ fn colmap_binary_and_text_agree() {
     assert_eq!(a.cameras, b.cameras);
     assert_eq!(a.cameras.len(), 2);
     assert_eq!(a.cameras[0].name, "a"); // sorted by name
-    assert_eq!(
-        (a.cameras[1].fx, a.cameras[1].fy, a.cameras[1].cx),
-        (300.0, 300.0, 160.0)
-    );
-    assert_eq!(
-        a.warnings.len(),
-        1,
-        "SIMPLE_RADIAL warns that distortion is ignored"
-    );
+    assert_eq!((a.cameras[1].fx, a.cameras[1].fy, a.cameras[1].cx), (300.0, 300.0, 160.0));
+    assert_eq!(a.warnings.len(), 1, "SIMPLE_RADIAL warns that distortion is ignored");
     assert_eq!(b.points.len(), 1);
     assert_eq!(a.points[0].xyz, b.points[0].xyz);
     assert_eq!(a.points[0].rgb, [255, 128, 0]);
@@ -477,10 +292,7 @@ fn statue_colmap_model_loads_and_points_project_into_the_views() {
     assert_eq!(model.cameras.len(), 29);
     assert_eq!(model.points.len(), 15_881);
     let c0 = &model.cameras[0];
-    assert_eq!(
-        (c0.name.as_str(), c0.width, c0.height),
-        ("IMG_2707", 1008, 756)
-    );
+    assert_eq!((c0.name.as_str(), c0.width, c0.height), ("IMG_2707", 1008, 756));
     assert!((c0.fx - 740.325).abs() < 1e-3 && (c0.fy - 742.618).abs() < 1e-3);
     // images_2 halves the intrinsics
     let half = c0.resized(504, 378);
@@ -498,10 +310,6 @@ fn statue_colmap_model_loads_and_points_project_into_the_views() {
                 }
             }
         }
-        assert!(
-            inside * 2 > model.points.len(),
-            "{}: only {inside} points project inside",
-            cam.name
-        );
+        assert!(inside * 2 > model.points.len(), "{}: only {inside} points project inside", cam.name);
     }
 }

@@ -13,9 +13,7 @@ fn with_extras(mut scene: GaussianScene) -> GaussianScene {
         scene.extras.push(ExtraProperty {
             name: format!("f_obj_{c}"),
             ty: PlyType::F32,
-            values: (0..n)
-                .map(|i| ((i * 31 + c * 7) as f32 * 0.173).sin() as f64)
-                .collect(),
+            values: (0..n).map(|i| ((i * 31 + c * 7) as f32 * 0.173).sin() as f64).collect(),
         });
     }
     scene.extras.push(ExtraProperty {
@@ -66,11 +64,7 @@ fn binary_round_trip_is_bit_exact_for_every_sh_degree_with_extras() {
 /// Re-encodes a scene's PLY in another property order and format, by hand.
 fn reorder_ascii(scene: &GaussianScene) -> String {
     let bytes = encode_ply(scene);
-    let text_end = bytes
-        .windows(11)
-        .position(|w| w == b"end_header\n")
-        .unwrap()
-        + 11;
+    let text_end = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
     let header = std::str::from_utf8(&bytes[..text_end]).unwrap();
     let props: Vec<(String, String)> = header
         .lines()
@@ -92,10 +86,7 @@ fn reorder_ascii(scene: &GaussianScene) -> String {
     let stride: usize = sizes.iter().sum();
     let body = &bytes[text_end..];
     let order: Vec<usize> = (0..props.len()).rev().collect(); // reversed property order
-    let mut out = format!(
-        "ply\nformat ascii 1.0\ncomment reordered\nelement vertex {}\n",
-        scene.len()
-    );
+    let mut out = format!("ply\nformat ascii 1.0\ncomment reordered\nelement vertex {}\n", scene.len());
     for &j in &order {
         out += &format!("property {} {}\n", props[j].0, props[j].1);
     }
@@ -123,24 +114,13 @@ fn reorder_ascii(scene: &GaussianScene) -> String {
 
 #[test]
 fn ascii_and_any_property_order_read_identically() {
-    let scene = with_extras(random_scene(
-        77,
-        2,
-        SceneMix {
-            normal: 50,
-            ..Default::default()
-        },
-    ));
+    let scene = with_extras(random_scene(77, 2, SceneMix { normal: 50, ..Default::default() }));
     let text = reorder_ascii(&scene);
     let back = read_ply_from(&mut std::io::Cursor::new(text.as_bytes()), "reordered.ply").unwrap();
     assert_eq!(bits(&scene), bits(&back));
     // extras keep their values (their order follows the file)
     for e in &scene.extras {
-        let b = back
-            .extras
-            .iter()
-            .find(|x| x.name == e.name)
-            .expect("extra property kept");
+        let b = back.extras.iter().find(|x| x.name == e.name).expect("extra property kept");
         assert_eq!(b.values, e.values);
         assert_eq!(b.ty, e.ty);
     }
@@ -160,30 +140,18 @@ fn guitar_round_trip_reproduces_the_file_byte_for_byte() {
 }
 
 fn err(bytes: &[u8]) -> String {
-    format!(
-        "{:#}",
-        read_ply_from(&mut std::io::Cursor::new(bytes), "bad.ply").unwrap_err()
-    )
+    format!("{:#}", read_ply_from(&mut std::io::Cursor::new(bytes), "bad.ply").unwrap_err())
 }
 
 #[test]
 fn broken_files_give_clear_errors() {
-    let scene = random_scene(
-        3,
-        1,
-        SceneMix {
-            normal: 20,
-            ..Default::default()
-        },
-    );
+    let scene = random_scene(3, 1, SceneMix { normal: 20, ..Default::default() });
     let good = encode_ply(&scene);
     let e = err(&good[..good.len() - 10]);
     assert!(e.contains("bad.ply") && e.contains("truncated"), "{e}");
     let e = err(b"hello\n");
     assert!(e.contains("not a PLY"), "{e}");
-    let e = err(
-        b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n",
-    );
+    let e = err(b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\nend_header\n");
     assert!(e.contains("missing required property"), "{e}");
     let e = err(b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n");
     assert!(e.contains("end_header"), "{e}");
@@ -201,10 +169,7 @@ fn broken_files_give_clear_errors() {
     zq.quats[2] = [0.0; 4];
     let e = format!("{:#}", zq.validate("zq.ply").unwrap_err());
     assert!(e.contains("zero-norm"), "{e}");
-    let e = format!(
-        "{:#}",
-        GaussianScene::default().validate("empty.ply").unwrap_err()
-    );
+    let e = format!("{:#}", GaussianScene::default().validate("empty.ply").unwrap_err());
     assert!(e.contains("no Gaussians"), "{e}");
 }
 
@@ -212,10 +177,7 @@ fn tempdir() -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!(
         "cogeo-test-{}-{}",
         std::process::id(),
-        std::thread::current()
-            .name()
-            .unwrap_or("t")
-            .replace("::", "_")
+        std::thread::current().name().unwrap_or("t").replace("::", "_")
     ));
     std::fs::create_dir_all(&d).unwrap();
     d

@@ -23,15 +23,7 @@ struct Errors {
 
 fn compare(gpu_out: &RenderOutput, reference: &ReferenceImage) -> Errors {
     let hw = (gpu_out.width * gpu_out.height) as usize;
-    let mut e = Errors {
-        color: 0.0,
-        alpha: 0.0,
-        depth_rel: 0.0,
-        features: 0.0,
-        compared: 0,
-        ambiguous: 0,
-        lit: 0,
-    };
+    let mut e = Errors { color: 0.0, alpha: 0.0, depth_rel: 0.0, features: 0.0, compared: 0, ambiguous: 0, lit: 0 };
     let d = gpu_out.feature_dim as usize;
     for i in 0..hw {
         if reference.ambiguous[i] {
@@ -43,62 +35,43 @@ fn compare(gpu_out: &RenderOutput, reference: &ReferenceImage) -> Errors {
             e.lit += 1;
         }
         for c in 0..3 {
-            e.color = e
-                .color
-                .max((gpu_out.rgb[c * hw + i] as f64 - reference.rgb[c * hw + i]).abs());
+            e.color = e.color.max((gpu_out.rgb[c * hw + i] as f64 - reference.rgb[c * hw + i]).abs());
         }
-        e.alpha = e
-            .alpha
-            .max((gpu_out.alpha[i] as f64 - reference.alpha[i]).abs());
+        e.alpha = e.alpha.max((gpu_out.alpha[i] as f64 - reference.alpha[i]).abs());
         if reference.alpha[i] > 0.0 {
             let r = reference.expected_depth[i];
-            e.depth_rel = e
-                .depth_rel
-                .max((gpu_out.expected_depth[i] as f64 - r).abs() / r.abs().max(1e-6));
+            e.depth_rel = e.depth_rel.max((gpu_out.expected_depth[i] as f64 - r).abs() / r.abs().max(1e-6));
             let acc = reference.depth[i];
-            e.depth_rel = e
-                .depth_rel
-                .max((gpu_out.depth[i] as f64 - acc).abs() / acc.abs().max(1e-3));
+            e.depth_rel = e.depth_rel.max((gpu_out.depth[i] as f64 - acc).abs() / acc.abs().max(1e-3));
         }
         for c in 0..d {
-            e.features = e
-                .features
-                .max((gpu_out.features[c * hw + i] as f64 - reference.features[c * hw + i]).abs());
+            e.features = e.features.max((gpu_out.features[c * hw + i] as f64 - reference.features[c * hw + i]).abs());
         }
     }
     e
 }
 
-fn check(
-    scene: &GaussianScene,
-    camera: &Camera,
-    features: Option<(&[f32], usize)>,
-    background: [f32; 3],
-    label: &str,
-) {
+fn check(scene: &GaussianScene, camera: &Camera, features: Option<(&[f32], usize)>, background: [f32; 3], label: &str) {
     let g = gpu();
     let buffers = SceneBuffers::upload(&g, scene, features).unwrap();
     let mut raster = Rasterizer::new(&g).unwrap();
-    let settings = RenderSettings {
-        background,
-        features: features.is_some(),
-        ..Default::default()
-    };
+    let settings = RenderSettings { background, features: features.is_some(), ..Default::default() };
     let out = raster.render(&buffers, camera, &settings).unwrap();
-    let reference = render_reference(
-        scene,
-        camera,
-        background.map(|v| v as f64),
-        0.01,
-        scene.sh_degree,
-        features,
-    );
+    let reference = render_reference(scene, camera, background.map(|v| v as f64), 0.01, scene.sh_degree, features);
     let e = compare(&out, &reference);
     let hw = (camera.width * camera.height) as usize;
     println!(
         "{label}: {}x{}, {} intersections, max err color {:.2e} alpha {:.2e} depth(rel) {:.2e} features {:.2e}; \
          {} ambiguous of {hw} pixels, {} lit",
-        camera.width, camera.height, out.num_intersections, e.color, e.alpha, e.depth_rel, e.features, e.ambiguous, e.lit
+        camera.width,
+        camera.height,
+        out.num_intersections,
+        e.color,
+        e.alpha,
+        e.depth_rel,
+        e.features,
+        e.ambiguous,
+        e.lit
     );
     assert!(
         e.ambiguous * 100 <= hw,
@@ -113,16 +86,8 @@ fn check(
     );
     assert!(e.color <= TOL, "{label}: color error {:.3e}", e.color);
     assert!(e.alpha <= TOL, "{label}: alpha error {:.3e}", e.alpha);
-    assert!(
-        e.depth_rel <= TOL,
-        "{label}: relative depth error {:.3e}",
-        e.depth_rel
-    );
-    assert!(
-        e.features <= TOL,
-        "{label}: feature error {:.3e}",
-        e.features
-    );
+    assert!(e.depth_rel <= TOL, "{label}: relative depth error {:.3e}", e.depth_rel);
+    assert!(e.features <= TOL, "{label}: feature error {:.3e}", e.features);
 }
 
 #[test]
@@ -131,13 +96,7 @@ fn conformance_sh_degrees_and_odd_sizes() {
     for degree in 0..=3u32 {
         let (w, h) = sizes[degree as usize];
         let scene = random_scene(100 + degree as u64, degree, SceneMix::default());
-        check(
-            &scene,
-            &test_camera(w, h),
-            None,
-            [0.1, 0.2, 0.3],
-            &format!("SH degree {degree}"),
-        );
+        check(&scene, &test_camera(w, h), None, [0.1, 0.2, 0.3], &format!("SH degree {degree}"));
     }
 }
 
@@ -145,102 +104,43 @@ fn conformance_sh_degrees_and_odd_sizes() {
 fn conformance_32_channel_features() {
     let scene = random_scene(7, 1, SceneMix::default());
     let f = random_features(8, scene.len(), 32);
-    check(
-        &scene,
-        &test_camera(75, 53),
-        Some((&f, 32)),
-        [0.0, 0.0, 0.0],
-        "32 features",
-    );
+    check(&scene, &test_camera(75, 53), Some((&f, 32)), [0.0, 0.0, 0.0], "32 features");
 }
 
 #[test]
 fn conformance_more_than_32_features_and_16() {
-    let scene = random_scene(
-        9,
-        0,
-        SceneMix {
-            normal: 120,
-            ..Default::default()
-        },
-    );
+    let scene = random_scene(9, 0, SceneMix { normal: 120, ..Default::default() });
     let f = random_features(10, scene.len(), 40);
-    check(
-        &scene,
-        &test_camera(48, 40),
-        Some((&f, 40)),
-        [1.0, 1.0, 1.0],
-        "40 features",
-    );
+    check(&scene, &test_camera(48, 40), Some((&f, 40)), [1.0, 1.0, 1.0], "40 features");
     let f = random_features(11, scene.len(), 16);
-    check(
-        &scene,
-        &test_camera(48, 40),
-        Some((&f, 16)),
-        [1.0, 1.0, 1.0],
-        "16 features",
-    );
+    check(&scene, &test_camera(48, 40), Some((&f, 16)), [1.0, 1.0, 1.0], "16 features");
 }
 
 #[test]
 fn conformance_dense_opaque_scene_terminates_early() {
     // many opaque Gaussians: most pixels reach T < 1e-4 and stop early
-    let mix = SceneMix {
-        normal: 0,
-        tiny: 0,
-        huge: 0,
-        behind: 5,
-        faint: 10,
-        opaque: 600,
-    };
+    let mix = SceneMix { normal: 0, tiny: 0, huge: 0, behind: 5, faint: 10, opaque: 600 };
     let scene = random_scene(21, 2, mix);
-    check(
-        &scene,
-        &test_camera(96, 64),
-        None,
-        [0.5, 0.5, 0.5],
-        "dense opaque",
-    );
+    check(&scene, &test_camera(96, 64), None, [0.5, 0.5, 0.5], "dense opaque");
 }
 
 #[test]
 fn conformance_huge_gaussians_cover_every_tile() {
-    let mix = SceneMix {
-        normal: 20,
-        tiny: 0,
-        huge: 40,
-        behind: 0,
-        faint: 0,
-        opaque: 0,
-    };
+    let mix = SceneMix { normal: 20, tiny: 0, huge: 40, behind: 0, faint: 0, opaque: 0 };
     let scene = random_scene(31, 3, mix);
     check(&scene, &test_camera(100, 70), None, [0.0, 0.0, 0.0], "huge");
 }
 
 #[test]
 fn everything_behind_the_camera_renders_background() {
-    let mix = SceneMix {
-        normal: 0,
-        tiny: 0,
-        huge: 0,
-        behind: 50,
-        faint: 0,
-        opaque: 0,
-    };
+    let mix = SceneMix { normal: 0, tiny: 0, huge: 0, behind: 50, faint: 0, opaque: 0 };
     let scene = random_scene(41, 1, mix);
     let g = gpu();
     let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
     let mut raster = Rasterizer::new(&g).unwrap();
     let bg = [0.25, 0.5, 0.75];
     let out = raster
-        .render(
-            &buffers,
-            &test_camera(40, 30),
-            &RenderSettings {
-                background: bg,
-                ..Default::default()
-            },
-        )
+        .render(&buffers, &test_camera(40, 30), &RenderSettings { background: bg, ..Default::default() })
         .unwrap();
     assert_eq!(out.num_intersections, 0);
     let hw = 40 * 30;
@@ -256,16 +156,10 @@ fn rendering_is_deterministic_across_calls_and_buffer_reuse() {
     let g = gpu();
     let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
     let mut raster = Rasterizer::new(&g).unwrap();
-    let a = raster
-        .render(&buffers, &test_camera(64, 64), &RenderSettings::default())
-        .unwrap();
+    let a = raster.render(&buffers, &test_camera(64, 64), &RenderSettings::default()).unwrap();
     // a different size in between forces reallocation of the image buffers
-    raster
-        .render(&buffers, &test_camera(200, 150), &RenderSettings::default())
-        .unwrap();
-    let b = raster
-        .render(&buffers, &test_camera(64, 64), &RenderSettings::default())
-        .unwrap();
+    raster.render(&buffers, &test_camera(200, 150), &RenderSettings::default()).unwrap();
+    let b = raster.render(&buffers, &test_camera(64, 64), &RenderSettings::default()).unwrap();
     assert_eq!(a.rgb, b.rgb);
     assert_eq!(a.n_contrib, b.n_contrib);
 }

@@ -17,18 +17,12 @@ fn percentile(mut v: Vec<f32>, q: f64) -> f64 {
 fn cameras_around(scene: &GaussianScene, count: usize, width: u32, height: u32) -> Vec<Camera> {
     let axis = |a: usize| scene.means.iter().map(|m| m[a]).collect::<Vec<_>>();
     let center: Vec<f64> = (0..3).map(|a| percentile(axis(a), 0.5)).collect();
-    let extent = (0..3)
-        .map(|a| percentile(axis(a), 0.95) - percentile(axis(a), 0.05))
-        .fold(0.0, f64::max);
+    let extent = (0..3).map(|a| percentile(axis(a), 0.95) - percentile(axis(a), 0.05)).fold(0.0, f64::max);
     (0..count)
         .map(|i| {
             let t = i as f64 / count as f64 * std::f64::consts::TAU;
             let r = 1.2 * extent;
-            let eye = [
-                center[0] + r * t.cos(),
-                center[1] + 0.3 * r,
-                center[2] + r * t.sin(),
-            ];
+            let eye = [center[0] + r * t.cos(), center[1] + 0.3 * r, center[2] + r * t.sin()];
             Camera::look_at(
                 &format!("v{i}"),
                 width,
@@ -58,23 +52,14 @@ fn guitar_renders_non_trivial_images_and_matches_the_reference() {
         let hw = (out.width * out.height) as usize;
         let coverage = out.alpha.iter().filter(|&&a| a > 0.5).count() as f64 / hw as f64;
         let mean: f64 = out.rgb.iter().map(|&v| v as f64).sum::<f64>() / (3 * hw) as f64;
-        let var: f64 = out
-            .rgb
-            .iter()
-            .map(|&v| (v as f64 - mean).powi(2))
-            .sum::<f64>()
-            / (3 * hw) as f64;
+        let var: f64 = out.rgb.iter().map(|&v| (v as f64 - mean).powi(2)).sum::<f64>() / (3 * hw) as f64;
         println!(
             "{}: coverage {coverage:.3}, color std {:.3}, {} intersections",
             cam.name,
             var.sqrt(),
             out.num_intersections
         );
-        assert!(
-            coverage > 0.05,
-            "{}: the guitar covers only {coverage} of the image",
-            cam.name
-        );
+        assert!(coverage > 0.05, "{}: the guitar covers only {coverage} of the image", cam.name);
         assert!(var.sqrt() > 0.05, "{}: image is nearly flat", cam.name);
         assert!(out.rgb.iter().all(|v| v.is_finite()));
     }
@@ -88,8 +73,7 @@ fn guitar_renders_non_trivial_images_and_matches_the_reference() {
     let mut ambiguous = 0;
     for i in 0..hw {
         for c in 0..3 {
-            max_err_all =
-                max_err_all.max((out.rgb[c * hw + i] as f64 - reference.rgb[c * hw + i]).abs());
+            max_err_all = max_err_all.max((out.rgb[c * hw + i] as f64 - reference.rgb[c * hw + i]).abs());
         }
         if reference.ambiguous[i] {
             ambiguous += 1;
@@ -104,14 +88,8 @@ fn guitar_renders_non_trivial_images_and_matches_the_reference() {
     // Real splats are dense (~40 Gaussians per pixel at this size), so many pixels hold two contributors
     // whose depths differ by less than float32 can resolve; those are checked with a looser bound.
     assert!(ambiguous * 5 <= hw, "{ambiguous} ambiguous pixels");
-    assert!(
-        max_err <= 1e-4,
-        "guitar: max error {max_err:.3e} against the reference"
-    );
-    assert!(
-        max_err_all <= 1e-3,
-        "guitar: max error {max_err_all:.3e} including near-tie pixels"
-    );
+    assert!(max_err <= 1e-4, "guitar: max error {max_err:.3e} against the reference");
+    assert!(max_err_all <= 1e-3, "guitar: max error {max_err_all:.3e} including near-tie pixels");
 }
 
 #[test]
@@ -119,24 +97,10 @@ fn scene_beyond_the_128_mib_binding_limit_renders_exactly() {
     // 760k SH-degree-3 Gaussians: the SH buffer alone is 146 MB, over lavapipe's 128 MiB per binding.
     // Only the last few hundred are in front of the camera, so the dense reference stays cheap, and the
     // visible ones sit at buffer offsets past 128 MiB.
-    let visible = random_scene(
-        61,
-        3,
-        SceneMix {
-            normal: 150,
-            tiny: 20,
-            huge: 3,
-            behind: 0,
-            faint: 20,
-            opaque: 20,
-        },
-    );
+    let visible = random_scene(61, 3, SceneMix { normal: 150, tiny: 20, huge: 3, behind: 0, faint: 20, opaque: 20 });
     let filler_count = 760_000;
     let k = visible.sh_coeffs();
-    let mut scene = GaussianScene {
-        sh_degree: 3,
-        ..Default::default()
-    };
+    let mut scene = GaussianScene { sh_degree: 3, ..Default::default() };
     scene.means = vec![[0.0, 0.0, -10.0]; filler_count];
     scene.normals = vec![[0.0; 3]; filler_count];
     scene.log_scales = vec![[-2.0; 3]; filler_count];
@@ -156,9 +120,7 @@ fn scene_beyond_the_128_mib_binding_limit_renders_exactly() {
     let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
     let mut raster = Rasterizer::new(&g).unwrap();
     let cam = test_camera(90, 60);
-    let out = raster
-        .render(&buffers, &cam, &RenderSettings::default())
-        .unwrap();
+    let out = raster.render(&buffers, &cam, &RenderSettings::default()).unwrap();
     let reference = render_reference(&visible, &cam, [0.0; 3], 0.01, 3, None);
     let hw = 90 * 60;
     let mut max_err: f64 = 0.0;
@@ -169,10 +131,7 @@ fn scene_beyond_the_128_mib_binding_limit_renders_exactly() {
             max_err = max_err.max((out.rgb[c * hw + i] as f64 - reference.rgb[c * hw + i]).abs());
         }
     }
-    println!(
-        "{} MB of SH; max error {max_err:.2e}; {lit} lit pixels",
-        sh_bytes >> 20
-    );
+    println!("{} MB of SH; max error {max_err:.2e}; {lit} lit pixels", sh_bytes >> 20);
     assert!(lit > hw / 2);
     assert!(max_err <= 1e-4, "max error {max_err:.3e}");
 }
@@ -181,28 +140,14 @@ fn scene_beyond_the_128_mib_binding_limit_renders_exactly() {
 fn out_of_memory_is_a_clear_error_naming_sizes() {
     use cogeo::gpu::{Buffer, MemoryKind};
     let g = gpu();
-    let too_big = g
-        .info()
-        .max_memory_allocation
-        .max(g.info().device_local_memory)
-        * 4;
+    let too_big = g.info().max_memory_allocation.max(g.info().device_local_memory) * 4;
     let err = match Buffer::new(&g, "sh", too_big, MemoryKind::Device) {
         Ok(_) => panic!("allocating {too_big} bytes should fail"),
         Err(e) => format!("{e:#}"),
     };
     assert!(err.contains("MiB") && err.contains(&g.info().name), "{err}");
     // the context is still usable afterwards
-    let scene = random_scene(
-        3,
-        0,
-        SceneMix {
-            normal: 10,
-            ..Default::default()
-        },
-    );
+    let scene = random_scene(3, 0, SceneMix { normal: 10, ..Default::default() });
     let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
-    Rasterizer::new(&g)
-        .unwrap()
-        .render(&buffers, &test_camera(20, 20), &RenderSettings::default())
-        .unwrap();
+    Rasterizer::new(&g).unwrap().render(&buffers, &test_camera(20, 20), &RenderSettings::default()).unwrap();
 }

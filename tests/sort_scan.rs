@@ -25,11 +25,7 @@ fn check_sort(g: &cogeo::gpu::Gpu, sort: &mut RadixSort, keys: &[u32], bits: u32
     let got_keys: Vec<u32> = rk.download(g, n).unwrap();
     let got_values: Vec<u32> = rv.download(g, n).unwrap();
 
-    let mask = if bits >= 32 {
-        u32::MAX
-    } else {
-        (1u32 << bits) - 1
-    };
+    let mask = if bits >= 32 { u32::MAX } else { (1u32 << bits) - 1 };
     let mut expected: Vec<(u32, u32)> = keys.iter().copied().zip(values).collect();
     expected.sort_by_key(|&(key, _)| key & mask); // stable
     for i in 0..n {
@@ -49,23 +45,7 @@ fn radix_sort_matches_stable_cpu_sort_around_block_boundaries() {
     let mut sort = RadixSort::new(&g).unwrap();
     let mut rng = Rng::new(3);
     let b = BLOCK_KEYS as usize;
-    for &n in &[
-        1usize,
-        2,
-        15,
-        16,
-        17,
-        255,
-        256,
-        257,
-        b - 1,
-        b,
-        b + 1,
-        2 * b - 1,
-        2 * b + 1,
-        3 * b + 77,
-        100_003,
-    ] {
+    for &n in &[1usize, 2, 15, 16, 17, 255, 256, 257, b - 1, b, b + 1, 2 * b - 1, 2 * b + 1, 3 * b + 77, 100_003] {
         let full: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
         check_sort(&g, &mut sort, &full, 32);
         // heavy duplicates: stability decides the value order
@@ -82,9 +62,7 @@ fn radix_sort_partial_key_widths_and_degenerate_inputs() {
     let n = 50_000;
     // 13 bits (tile ids at 1080p), 31 bits (positive float depths), odd pass counts (5 bits -> 2, 9 -> 3)
     for bits in [5u32, 9, 13, 31] {
-        let keys: Vec<u32> = (0..n)
-            .map(|_| (rng.next_u64() as u32) & ((1u32 << bits) - 1))
-            .collect();
+        let keys: Vec<u32> = (0..n).map(|_| (rng.next_u64() as u32) & ((1u32 << bits) - 1)).collect();
         check_sort(&g, &mut sort, &keys, bits);
     }
     // only the low bits are sorted on: high bits must travel with the key but not order it
@@ -93,9 +71,7 @@ fn radix_sort_partial_key_widths_and_degenerate_inputs() {
     check_sort(&g, &mut sort, &vec![42u32; n], 32);
     let descending: Vec<u32> = (0..n as u32).rev().collect();
     check_sort(&g, &mut sort, &descending, 32);
-    let floats: Vec<u32> = (0..n)
-        .map(|_| (rng.range(0.01, 100.0) as f32).to_bits())
-        .collect();
+    let floats: Vec<u32> = (0..n).map(|_| (rng.range(0.01, 100.0) as f32).to_bits()).collect();
     check_sort(&g, &mut sort, &floats, 31);
 }
 

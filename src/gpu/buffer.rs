@@ -48,10 +48,7 @@ impl Buffer {
             | vk::BufferUsageFlags::TRANSFER_DST;
         let buffer = unsafe {
             device.create_buffer(
-                &vk::BufferCreateInfo::default()
-                    .size(size)
-                    .usage(usage)
-                    .sharing_mode(vk::SharingMode::EXCLUSIVE),
+                &vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE),
                 None,
             )?
         };
@@ -61,17 +58,13 @@ impl Buffer {
             MemoryKind::Upload => MemoryLocation::CpuToGpu,
             MemoryKind::Readback => MemoryLocation::GpuToCpu,
         };
-        let allocation = shared
-            .allocator
-            .lock()
-            .unwrap()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
+        let allocation = shared.allocator.lock().unwrap().allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
         let allocation = match allocation {
             Ok(a) => a,
             Err(e) => {
@@ -85,26 +78,14 @@ impl Buffer {
             }
         };
         unsafe { device.bind_buffer_memory(buffer, allocation.memory(), allocation.offset())? };
-        let address = unsafe {
-            device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(buffer))
-        };
-        Ok(Buffer {
-            gpu: shared.clone(),
-            buffer,
-            allocation: Some(allocation),
-            size,
-            address,
-        })
+        let address =
+            unsafe { device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(buffer)) };
+        Ok(Buffer { gpu: shared.clone(), buffer, allocation: Some(allocation), size, address })
     }
 
     /// Allocates a device buffer holding `data`.
     pub fn from_slice<T: bytemuck::Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer> {
-        let buffer = Buffer::new(
-            gpu,
-            name,
-            std::mem::size_of_val(data) as u64,
-            MemoryKind::Device,
-        )?;
+        let buffer = Buffer::new(gpu, name, std::mem::size_of_val(data) as u64, MemoryKind::Device)?;
         buffer.upload(gpu, data)?;
         Ok(buffer)
     }
@@ -119,10 +100,7 @@ impl Buffer {
     }
 
     fn mapped(&self) -> Option<*mut u8> {
-        self.allocation
-            .as_ref()
-            .and_then(|a| a.mapped_ptr())
-            .map(|p| p.as_ptr() as *mut u8)
+        self.allocation.as_ref().and_then(|a| a.mapped_ptr()).map(|p| p.as_ptr() as *mut u8)
     }
 
     /// Copies `data` to the start of the buffer: directly where the memory is host-visible, through a
@@ -130,11 +108,7 @@ impl Buffer {
     pub fn upload<T: bytemuck::Pod>(&self, gpu: &Gpu, data: &[T]) -> Result<()> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         if bytes.len() as u64 > self.size {
-            return Err(anyhow!(
-                "upload of {} bytes into a buffer of {} bytes",
-                bytes.len(),
-                self.size
-            ));
+            return Err(anyhow!("upload of {} bytes into a buffer of {} bytes", bytes.len(), self.size));
         }
         if bytes.is_empty() {
             return Ok(());
@@ -143,15 +117,8 @@ impl Buffer {
             unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
             return Ok(());
         }
-        let staging = Buffer::new(
-            gpu,
-            "staging upload",
-            bytes.len() as u64,
-            MemoryKind::Upload,
-        )?;
-        let ptr = staging
-            .mapped()
-            .ok_or_else(|| anyhow!("upload staging memory is not mapped"))?;
+        let staging = Buffer::new(gpu, "staging upload", bytes.len() as u64, MemoryKind::Upload)?;
+        let ptr = staging.mapped().ok_or_else(|| anyhow!("upload staging memory is not mapped"))?;
         unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
         let mut rec = super::Recorder::new(gpu)?;
         rec.copy(&staging, self, bytes.len() as u64);
@@ -165,20 +132,12 @@ impl Buffer {
     }
 
     /// Reads back `count` elements starting at element `first`. Waits for completion.
-    pub fn download_at<T: bytemuck::Pod>(
-        &self,
-        gpu: &Gpu,
-        first: u64,
-        count: usize,
-    ) -> Result<Vec<T>> {
+    pub fn download_at<T: bytemuck::Pod>(&self, gpu: &Gpu, first: u64, count: usize) -> Result<Vec<T>> {
         let elem = std::mem::size_of::<T>() as u64;
         let offset = first * elem;
         let bytes = count as u64 * elem;
         if offset + bytes > self.size {
-            return Err(anyhow!(
-                "download of {bytes} bytes from a buffer of {} bytes",
-                self.size
-            ));
+            return Err(anyhow!("download of {bytes} bytes from a buffer of {} bytes", self.size));
         }
         let mut out = vec![T::zeroed(); count];
         if count == 0 {
@@ -186,22 +145,14 @@ impl Buffer {
         }
         let out_bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
         if let Some(ptr) = self.mapped() {
-            unsafe {
-                std::ptr::copy_nonoverlapping(
-                    ptr.add(offset as usize),
-                    out_bytes.as_mut_ptr(),
-                    out_bytes.len(),
-                )
-            };
+            unsafe { std::ptr::copy_nonoverlapping(ptr.add(offset as usize), out_bytes.as_mut_ptr(), out_bytes.len()) };
             return Ok(out);
         }
         let staging = Buffer::new(gpu, "staging readback", bytes, MemoryKind::Readback)?;
         let mut rec = super::Recorder::new(gpu)?;
         rec.copy_region(self, offset, &staging, 0, bytes);
         rec.submit_and_wait()?;
-        let ptr = staging
-            .mapped()
-            .ok_or_else(|| anyhow!("readback staging memory is not mapped"))?;
+        let ptr = staging.mapped().ok_or_else(|| anyhow!("readback staging memory is not mapped"))?;
         unsafe { std::ptr::copy_nonoverlapping(ptr, out_bytes.as_mut_ptr(), out_bytes.len()) };
         Ok(out)
     }
@@ -209,15 +160,9 @@ impl Buffer {
     /// Writes a plain-old-data value to a host-visible buffer (parameter blocks); no GPU work.
     pub fn write_pod<T: bytemuck::Pod>(&self, value: &T) -> Result<()> {
         let bytes = bytemuck::bytes_of(value);
-        let ptr = self
-            .mapped()
-            .ok_or_else(|| anyhow!("write_pod on a buffer that is not host-visible"))?;
+        let ptr = self.mapped().ok_or_else(|| anyhow!("write_pod on a buffer that is not host-visible"))?;
         if bytes.len() as u64 > self.size {
-            return Err(anyhow!(
-                "write_pod of {} bytes into a buffer of {} bytes",
-                bytes.len(),
-                self.size
-            ));
+            return Err(anyhow!("write_pod of {} bytes into a buffer of {} bytes", bytes.len(), self.size));
         }
         unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len()) };
         Ok(())

@@ -46,8 +46,7 @@ impl Recorder {
         unsafe {
             device.begin_command_buffer(
                 cmd,
-                &vk::CommandBufferBeginInfo::default()
-                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
             )?
         };
         let query_pool = if timestamps && s.info.timestamps {
@@ -67,14 +66,7 @@ impl Recorder {
         } else {
             None
         };
-        Ok(Recorder {
-            gpu: gpu.clone(),
-            cmd,
-            fence,
-            query_pool,
-            labels: Vec::new(),
-            pending_barrier: false,
-        })
+        Ok(Recorder { gpu: gpu.clone(), cmd, fence, query_pool, labels: Vec::new(), pending_barrier: false })
     }
 
     fn device(&self) -> &ash::Device {
@@ -110,28 +102,14 @@ impl Recorder {
     }
 
     /// Records a dispatch of `groups` workgroups; push constants are the bytes of `push`.
-    pub fn dispatch<P: bytemuck::Pod>(
-        &mut self,
-        pipeline: &ComputePipeline,
-        push: &P,
-        groups: [u32; 3],
-    ) {
+    pub fn dispatch<P: bytemuck::Pod>(&mut self, pipeline: &ComputePipeline, push: &P, groups: [u32; 3]) {
         self.barrier_if_needed();
         let bytes = bytemuck::bytes_of(push);
-        assert!(
-            bytes.len() as u32 <= super::pipeline::PUSH_CONSTANT_BYTES,
-            "push constants too large"
-        );
+        assert!(bytes.len() as u32 <= super::pipeline::PUSH_CONSTANT_BYTES, "push constants too large");
         unsafe {
             let d = self.device();
             d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.pipeline);
-            d.cmd_push_constants(
-                self.cmd,
-                pipeline.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
-                bytes,
-            );
+            d.cmd_push_constants(self.cmd, pipeline.layout, vk::ShaderStageFlags::COMPUTE, 0, bytes);
             d.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
         }
         self.pending_barrier = true;
@@ -140,15 +118,7 @@ impl Recorder {
     /// Fills `bytes` bytes from `offset` with the 32-bit `value`.
     pub fn fill(&mut self, buffer: &Buffer, offset: u64, bytes: u64, value: u32) {
         self.barrier_if_needed();
-        unsafe {
-            self.device().cmd_fill_buffer(
-                self.cmd,
-                buffer.buffer,
-                offset,
-                bytes.next_multiple_of(4),
-                value,
-            )
-        };
+        unsafe { self.device().cmd_fill_buffer(self.cmd, buffer.buffer, offset, bytes.next_multiple_of(4), value) };
         self.pending_barrier = true;
     }
 
@@ -156,23 +126,10 @@ impl Recorder {
         self.copy_region(src, 0, dst, 0, bytes);
     }
 
-    pub fn copy_region(
-        &mut self,
-        src: &Buffer,
-        src_offset: u64,
-        dst: &Buffer,
-        dst_offset: u64,
-        bytes: u64,
-    ) {
+    pub fn copy_region(&mut self, src: &Buffer, src_offset: u64, dst: &Buffer, dst_offset: u64, bytes: u64) {
         self.barrier_if_needed();
-        let region = [vk::BufferCopy::default()
-            .src_offset(src_offset)
-            .dst_offset(dst_offset)
-            .size(bytes)];
-        unsafe {
-            self.device()
-                .cmd_copy_buffer(self.cmd, src.buffer, dst.buffer, &region)
-        };
+        let region = [vk::BufferCopy::default().src_offset(src_offset).dst_offset(dst_offset).size(bytes)];
+        unsafe { self.device().cmd_copy_buffer(self.cmd, src.buffer, dst.buffer, &region) };
         self.pending_barrier = true;
     }
 
@@ -183,14 +140,7 @@ impl Recorder {
         if index >= MAX_TIMESTAMPS {
             return;
         }
-        unsafe {
-            self.device().cmd_write_timestamp(
-                self.cmd,
-                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                pool,
-                index,
-            )
-        };
+        unsafe { self.device().cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, index) };
         self.labels.push(label.to_string());
     }
 
@@ -204,9 +154,7 @@ impl Recorder {
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
             {
                 let _guard = s.submit_lock.lock().unwrap();
-                device
-                    .queue_submit(s.queue, &submit, self.fence)
-                    .context("vkQueueSubmit failed")?;
+                device.queue_submit(s.queue, &submit, self.fence).context("vkQueueSubmit failed")?;
             }
             device
                 .wait_for_fences(&[self.fence], true, u64::MAX)
@@ -229,10 +177,7 @@ impl Recorder {
                 let ms = stamps[i + 1].saturating_sub(stamps[i]) as f64 * period * 1e-6;
                 match timings.iter_mut().find(|t| &t.pass == label) {
                     Some(t) => t.ms += ms,
-                    None => timings.push(PassTiming {
-                        pass: label.clone(),
-                        ms,
-                    }),
+                    None => timings.push(PassTiming { pass: label.clone(), ms }),
                 }
             }
         }

@@ -64,11 +64,7 @@ type MessageLog = Mutex<Vec<String>>;
 pub(crate) struct GpuShared {
     _entry: ash::Entry,
     pub(crate) instance: ash::Instance,
-    debug: Option<(
-        ash::ext::debug_utils::Instance,
-        vk::DebugUtilsMessengerEXT,
-        *mut MessageLog,
-    )>,
+    debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT, *mut MessageLog)>,
     pub(crate) device: ash::Device,
     pub(crate) queue: vk::Queue,
     pub(crate) command_pool: vk::CommandPool,
@@ -101,11 +97,8 @@ pub struct DeviceChoice {
 impl DeviceChoice {
     /// Selector from `--device` or else `COGEO_DEVICE`; validation from `COGEO_VALIDATE=1`.
     pub fn from_env(selector: Option<String>) -> Self {
-        let selector =
-            selector.or_else(|| std::env::var("COGEO_DEVICE").ok().filter(|s| !s.is_empty()));
-        let validate = std::env::var("COGEO_VALIDATE")
-            .map(|v| v == "1" || v == "true")
-            .unwrap_or(false);
+        let selector = selector.or_else(|| std::env::var("COGEO_DEVICE").ok().filter(|s| !s.is_empty()));
+        let validate = std::env::var("COGEO_VALIDATE").map(|v| v == "1" || v == "true").unwrap_or(false);
         DeviceChoice { selector, validate }
     }
 }
@@ -121,9 +114,7 @@ unsafe extern "system" fn debug_callback(
     let message = if data.is_null() || (*data).p_message.is_null() {
         "(no message)".to_string()
     } else {
-        CStr::from_ptr((*data).p_message)
-            .to_string_lossy()
-            .into_owned()
+        CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
     };
     let text = format!("{severity:?}: {message}");
     eprintln!("vulkan validation: {text}");
@@ -161,11 +152,7 @@ fn create_instance(entry: &ash::Entry, validate: bool) -> Result<ash::Instance> 
         .engine_name(c"cogeo")
         .api_version(vk::API_VERSION_1_2);
     let available_ext = unsafe { entry.enumerate_instance_extension_properties(None)? };
-    let has_ext = |name: &CStr| {
-        available_ext
-            .iter()
-            .any(|e| e.extension_name_as_c_str() == Ok(name))
-    };
+    let has_ext = |name: &CStr| available_ext.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
     let mut extensions = Vec::new();
     let mut flags = vk::InstanceCreateFlags::empty();
     // MoltenVK (Apple) is only enumerated with the portability extension.
@@ -176,10 +163,7 @@ fn create_instance(entry: &ash::Entry, validate: bool) -> Result<ash::Instance> 
     let mut layers = Vec::new();
     if validate {
         let available = unsafe { entry.enumerate_instance_layer_properties()? };
-        if !available
-            .iter()
-            .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER))
-        {
+        if !available.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER)) {
             bail!(
                 "COGEO_VALIDATE=1 but the Khronos validation layer is not installed \
                  (Debian/Ubuntu: apt-get install vulkan-validationlayers)"
@@ -213,19 +197,15 @@ fn query_info(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) ->
 
         let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
-        let exts = instance
-            .enumerate_device_extension_properties(pd)
-            .unwrap_or_default();
-        let has_atomic_ext = exts
-            .iter()
-            .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::shader_atomic_float::NAME));
+        let exts = instance.enumerate_device_extension_properties(pd).unwrap_or_default();
+        let has_atomic_ext =
+            exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ash::ext::shader_atomic_float::NAME));
         let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12);
         if has_atomic_ext {
             features2 = features2.push_next(&mut atomic_float);
         }
         instance.get_physical_device_features2(pd, &mut features2);
-        let float_atomic_add =
-            has_atomic_ext && atomic_float.shader_buffer_float32_atomic_add == vk::TRUE;
+        let float_atomic_add = has_atomic_ext && atomic_float.shader_buffer_float32_atomic_add == vk::TRUE;
         let buffer_device_address = v12.buffer_device_address == vk::TRUE;
 
         let mem = instance.get_physical_device_memory_properties(pd);
@@ -235,16 +215,12 @@ fn query_info(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) ->
             .map(|h| h.size)
             .sum();
         let qf = instance.get_physical_device_queue_family_properties(pd);
-        let timestamps = qf
-            .iter()
-            .any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && q.timestamp_valid_bits > 0);
+        let timestamps =
+            qf.iter().any(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE) && q.timestamp_valid_bits > 0);
         let v = props.api_version;
         DeviceInfo {
             index,
-            name: props
-                .device_name_as_c_str()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default(),
+            name: props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
             device_type: device_type_name(props.device_type).to_string(),
             api_version: format!(
                 "{}.{}.{}",
@@ -252,10 +228,7 @@ fn query_info(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) ->
                 vk::api_version_minor(v),
                 vk::api_version_patch(v)
             ),
-            driver: driver
-                .driver_info_as_c_str()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default(),
+            driver: driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
             subgroup_size: subgroup.subgroup_size,
             max_shared_memory: props.limits.max_compute_shared_memory_size,
             max_storage_buffer_range: props.limits.max_storage_buffer_range,
@@ -277,11 +250,7 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
     )?;
     let instance = create_instance(&entry, false)?;
     let pds = unsafe { instance.enumerate_physical_devices()? };
-    let infos = pds
-        .iter()
-        .enumerate()
-        .map(|(i, &pd)| query_info(&instance, pd, i))
-        .collect();
+    let infos = pds.iter().enumerate().map(|(i, &pd)| query_info(&instance, pd, i)).collect();
     unsafe { instance.destroy_instance(None) };
     Ok(infos)
 }
@@ -298,8 +267,7 @@ impl Gpu {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
             let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
                 )
                 .message_type(
                     vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -318,57 +286,36 @@ impl Gpu {
         if pds.is_empty() {
             bail!("no Vulkan device found; for the CPU install Mesa lavapipe (apt-get install mesa-vulkan-drivers)");
         }
-        let infos: Vec<DeviceInfo> = pds
-            .iter()
-            .enumerate()
-            .map(|(i, &pd)| query_info(&instance, pd, i))
-            .collect();
+        let infos: Vec<DeviceInfo> = pds.iter().enumerate().map(|(i, &pd)| query_info(&instance, pd, i)).collect();
         let index = match &choice.selector {
             Some(sel) => {
                 if let Ok(i) = sel.parse::<usize>() {
                     if i >= infos.len() {
-                        bail!(
-                            "--device {i}: only {} Vulkan device(s) found (see `cogeo devices`)",
-                            infos.len()
-                        );
+                        bail!("--device {i}: only {} Vulkan device(s) found (see `cogeo devices`)", infos.len());
                     }
                     i
                 } else {
                     let lower = sel.to_lowercase();
-                    infos
-                        .iter()
-                        .position(|d| d.name.to_lowercase().contains(&lower))
-                        .ok_or_else(|| {
-                            anyhow!(
-                                "--device {sel:?}: no device name contains it; devices: {}",
-                                infos
-                                    .iter()
-                                    .map(|d| d.name.as_str())
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
-                            )
-                        })?
+                    infos.iter().position(|d| d.name.to_lowercase().contains(&lower)).ok_or_else(|| {
+                        anyhow!(
+                            "--device {sel:?}: no device name contains it; devices: {}",
+                            infos.iter().map(|d| d.name.as_str()).collect::<Vec<_>>().join(", ")
+                        )
+                    })?
                 }
             }
             None => {
-                let types: Vec<_> = pds
-                    .iter()
-                    .map(|&pd| unsafe { instance.get_physical_device_properties(pd) }.device_type)
-                    .collect();
+                let types: Vec<_> =
+                    pds.iter().map(|&pd| unsafe { instance.get_physical_device_properties(pd) }.device_type).collect();
                 (0..infos.len())
                     .filter(|&i| infos[i].buffer_device_address)
                     .min_by_key(|&i| device_type_rank(types[i]))
-                    .ok_or_else(|| {
-                        anyhow!("no Vulkan device supports buffer device address (Vulkan 1.2)")
-                    })?
+                    .ok_or_else(|| anyhow!("no Vulkan device supports buffer device address (Vulkan 1.2)"))?
             }
         };
         let info = infos[index].clone();
         if !info.buffer_device_address {
-            bail!(
-                "device {} does not support buffer device address, which cogeo requires",
-                info.name
-            );
+            bail!("device {} does not support buffer device address, which cogeo requires", info.name);
         }
         let physical_device = pds[index];
 
@@ -376,8 +323,7 @@ impl Gpu {
         let queue_family = qf
             .iter()
             .position(|q| q.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            .ok_or_else(|| anyhow!("device {} has no compute queue", info.name))?
-            as u32;
+            .ok_or_else(|| anyhow!("device {} has no compute queue", info.name))? as u32;
 
         let exts = unsafe { instance.enumerate_device_extension_properties(physical_device)? };
         let has_ext = |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
@@ -392,15 +338,13 @@ impl Gpu {
         let features = vk::PhysicalDeviceFeatures::default()
             .shader_int64(supported.shader_int64 == vk::TRUE)
             .shader_float64(supported.shader_float64 == vk::TRUE);
-        let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
-            .buffer_device_address(true)
-            .scalar_block_layout(true);
-        let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
-            .shader_buffer_float32_atomic_add(true);
+        let mut v12 =
+            vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true).scalar_block_layout(true);
+        let mut atomic_float =
+            vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_buffer_float32_atomic_add(true);
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         let mut device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_extension_names(&device_exts)

@@ -21,39 +21,25 @@ impl ComputePipeline {
         let device = &gpu.shared.device;
         let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
             .with_context(|| format!("shader {name}: invalid SPIR-V"))?;
-        let module = unsafe {
-            device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)?
-        };
+        let module = unsafe { device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)? };
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .offset(0)
             .size(PUSH_CONSTANT_BYTES)];
         let layout = unsafe {
-            device.create_pipeline_layout(
-                &vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges),
-                None,
-            )?
+            device
+                .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges), None)?
         };
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
-        let info = [vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(layout)];
-        let result =
-            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        let result = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
         unsafe { device.destroy_shader_module(module, None) };
-        let pipeline = result
-            .map_err(|(_, e)| e)
-            .with_context(|| format!("shader {name}: pipeline creation failed"))?[0];
-        Ok(ComputePipeline {
-            gpu: gpu.shared.clone(),
-            pipeline,
-            layout,
-            name,
-        })
+        let pipeline =
+            result.map_err(|(_, e)| e).with_context(|| format!("shader {name}: pipeline creation failed"))?[0];
+        Ok(ComputePipeline { gpu: gpu.shared.clone(), pipeline, layout, name })
     }
 }
 

@@ -3,6 +3,7 @@
 //! (tile_ranges.comp), 16x16 tile alpha blending of RGB / alpha / depth (blend.comp) and N-dim
 //! features (blend_features.comp). `reference` is the dense f64 CPU twin the tests check against.
 
+pub mod backward;
 pub mod params;
 pub mod reference;
 pub mod scan;
@@ -35,11 +36,7 @@ pub struct SceneBuffers {
 
 impl SceneBuffers {
     /// Uploads a scene; `features` is an N x D row-major matrix.
-    pub fn upload(
-        gpu: &Gpu,
-        scene: &GaussianScene,
-        features: Option<(&[f32], usize)>,
-    ) -> Result<SceneBuffers> {
+    pub fn upload(gpu: &Gpu, scene: &GaussianScene, features: Option<(&[f32], usize)>) -> Result<SceneBuffers> {
         let n = scene.len();
         let bytes = n as u64 * (3 + 3 + 4 + 1 + 3 * scene.sh_coeffs() as u64) * 4;
         let with_context = |r: Result<Buffer>| {
@@ -55,10 +52,7 @@ impl SceneBuffers {
         let features = match features {
             Some((f, d)) => {
                 assert_eq!(f.len(), n * d, "feature matrix must be N x D");
-                Some((
-                    with_context(Buffer::from_slice(gpu, "features", f))?,
-                    d as u32,
-                ))
+                Some((with_context(Buffer::from_slice(gpu, "features", f))?, d as u32))
             }
             None => None,
         };
@@ -66,11 +60,7 @@ impl SceneBuffers {
             means: with_context(Buffer::from_slice(gpu, "means", &scene.means))?,
             log_scales: with_context(Buffer::from_slice(gpu, "log_scales", &scene.log_scales))?,
             quats: with_context(Buffer::from_slice(gpu, "quats", &scene.quats))?,
-            opacity_logits: with_context(Buffer::from_slice(
-                gpu,
-                "opacity_logits",
-                &scene.opacity_logits,
-            ))?,
+            opacity_logits: with_context(Buffer::from_slice(gpu, "opacity_logits", &scene.opacity_logits))?,
             sh: with_context(Buffer::from_slice(gpu, "sh", &scene.sh))?,
             num_gaussians: n as u32,
             sh_degree: scene.sh_degree,
@@ -96,13 +86,7 @@ pub struct RenderSettings {
 
 impl Default for RenderSettings {
     fn default() -> Self {
-        RenderSettings {
-            background: [0.0; 3],
-            near: 0.01,
-            sh_degree: None,
-            features: false,
-            timestamps: false,
-        }
+        RenderSettings { background: [0.0; 3], near: 0.01, sh_degree: None, features: false, timestamps: false }
     }
 }
 
@@ -124,6 +108,24 @@ pub struct RenderOutput {
     pub feature_dim: u32,
     pub num_intersections: u32,
     pub timings: Vec<PassTiming>,
+}
+
+/// What a forward pass leaves for the host: its parameter block (camera, sizes, buffer addresses)
+/// and statistics.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub params: RenderParams,
+    pub num_intersections: u32,
+    pub timings: Vec<PassTiming>,
+}
+
+/// The output planes of the last forward pass, on the GPU.
+pub struct FrameOutputs<'a> {
+    pub rgb: &'a Buffer,
+    pub alpha: &'a Buffer,
+    pub depth: &'a Buffer,
+    pub expected_depth: &'a Buffer,
+    pub features: &'a Buffer,
 }
 
 /// Working buffers of one frame, grown on demand and reused.
@@ -195,12 +197,7 @@ impl Rasterizer {
             blend_features: ComputePipeline::new(gpu, "blend_features", shaders::BLEND_FEATURES)?,
             sort: RadixSort::new(gpu)?,
             scan: scan::PrefixScan::new(gpu)?,
-            params: Buffer::new(
-                gpu,
-                "render params",
-                std::mem::size_of::<RenderParams>() as u64,
-                MemoryKind::Upload,
-            )?,
+            params: Buffer::new(gpu, "render params", std::mem::size_of::<RenderParams>() as u64, MemoryKind::Upload)?,
             frame: None,
             isect: None,
             image: None,
@@ -208,11 +205,7 @@ impl Rasterizer {
     }
 
     fn reserve_gaussians(&mut self, n: u32) -> Result<()> {
-        if self
-            .frame
-            .as_ref()
-            .is_some_and(|f| f.gaussian_capacity >= n)
-        {
+        if self.frame.as_ref().is_some_and(|f| f.gaussian_capacity >= n) {
             return Ok(());
         }
         self.frame = None;
@@ -258,11 +251,7 @@ impl Rasterizer {
     }
 
     fn reserve_image(&mut self, width: u32, height: u32, feature_dim: u32) -> Result<()> {
-        if self
-            .image
-            .as_ref()
-            .is_some_and(|i| i.width == width && i.height == height && i.feature_dim >= feature_dim)
-        {
+        if self.image.as_ref().is_some_and(|i| i.width == width && i.height == height && i.feature_dim >= feature_dim) {
             return Ok(());
         }
         self.image = None;
@@ -288,12 +277,14 @@ impl Rasterizer {
 
     /// Renders one view. Two submissions: projection, depth sort and the scan of tile counts; then,
     /// once the number of intersections is known, emission, tile sort, ranges and blending.
-    pub fn render(
-        &mut self,
-        scene: &SceneBuffers,
-        camera: &Camera,
-        settings: &RenderSettings,
-    ) -> Result<RenderOutput> {
+    pub fn render(&mut self, scene: &SceneBuffers, camera: &Camera, settings: &RenderSettings) -> Result<RenderOutput> {
+        let frame = self.forward(scene, camera, settings)?;
+        self.read_output(&frame)
+    }
+
+    /// Runs the forward passes and leaves every output and the per-pixel state on the GPU (see
+    /// `outputs`), ready for a loss and the backward passes.
+    pub fn forward(&mut self, scene: &SceneBuffers, camera: &Camera, settings: &RenderSettings) -> Result<Frame> {
         let (width, height) = (camera.width, camera.height);
         if width == 0 || height == 0 {
             bail!("camera {:?} has an empty image size", camera.name);
@@ -302,11 +293,7 @@ impl Rasterizer {
         if n == 0 {
             bail!("cannot render an empty scene");
         }
-        let feature_dim = if settings.features {
-            scene.feature_dim
-        } else {
-            0
-        };
+        let feature_dim = if settings.features { scene.feature_dim } else { 0 };
         if settings.features && scene.features.is_none() {
             bail!("features requested but the scene has none");
         }
@@ -318,9 +305,7 @@ impl Rasterizer {
 
         let mut params = self.frame_params(scene, camera, settings, feature_dim, tiles_x, tiles_y);
         self.params.write_pod(&params)?;
-        let push = ParamsPush {
-            params: self.params.address(),
-        };
+        let push = ParamsPush { params: self.params.address() };
         let frame = self.frame.as_ref().unwrap();
         let isect = self.isect.as_ref().unwrap();
 
@@ -328,27 +313,15 @@ impl Rasterizer {
         let mut rec = Recorder::with_timestamps(&self.gpu, settings.timestamps)?;
         rec.dispatch(&self.project, &push, dispatch_1d(n.div_ceil(256)));
         rec.mark("project");
-        let in_alt = self.sort.record(
-            &mut rec,
-            &frame.depth_keys,
-            &frame.depth_order,
-            &isect.tile_alt,
-            &isect.gauss_alt,
-            n,
-            31,
-        );
-        assert!(
-            !in_alt,
-            "the 31-bit depth sort has an even number of passes"
-        );
+        let in_alt =
+            self.sort.record(&mut rec, &frame.depth_keys, &frame.depth_order, &isect.tile_alt, &isect.gauss_alt, n, 31);
+        assert!(!in_alt, "the 31-bit depth sort has an even number of passes");
         rec.mark("depth sort");
         rec.dispatch(&self.gather, &push, dispatch_1d((n + 1).div_ceil(256)));
         self.scan.record(&mut rec, &frame.isect_offsets, n + 1);
         rec.mark("tile count scan");
         let mut timings = rec.submit_and_wait()?;
-        let m = frame
-            .isect_offsets
-            .download_at::<u32>(&self.gpu, n as u64, 1)?[0];
+        let m = frame.isect_offsets.download_at::<u32>(&self.gpu, n as u64, 1)?[0];
 
         // submission 2: emit intersections, sort by tile, find ranges, blend
         self.reserve_intersections(m)?;
@@ -356,11 +329,8 @@ impl Rasterizer {
         let image = self.image.as_ref().unwrap();
         let tile_bits = 32 - (num_tiles.max(2) - 1).leading_zeros();
         let sorted_in_alt = sort::passes_for_bits(tile_bits) % 2 == 1;
-        let (sorted_tile, sorted_gauss) = if sorted_in_alt {
-            (&isect.tile_alt, &isect.gauss_alt)
-        } else {
-            (&isect.tile, &isect.gauss)
-        };
+        let (sorted_tile, sorted_gauss) =
+            if sorted_in_alt { (&isect.tile_alt, &isect.gauss_alt) } else { (&isect.tile, &isect.gauss) };
         params.isect_tile = sorted_tile.address();
         params.isect_gauss = sorted_gauss.address();
         self.params.write_pod(&params)?;
@@ -368,31 +338,17 @@ impl Rasterizer {
         let mut rec = Recorder::with_timestamps(&self.gpu, settings.timestamps)?;
         rec.fill(&image.tile_ranges, 0, num_tiles as u64 * 8, 0);
         if m > 0 {
-            let emit_push = EmitPush {
-                params: push.params,
-                out_tile: isect.tile.address(),
-                out_gauss: isect.gauss.address(),
-            };
+            let emit_push =
+                EmitPush { params: push.params, out_tile: isect.tile.address(), out_gauss: isect.gauss.address() };
             rec.dispatch(&self.emit, &emit_push, dispatch_1d(n.div_ceil(256)));
             rec.mark("emit intersections");
-            let ended_in_alt = self.sort.record(
-                &mut rec,
-                &isect.tile,
-                &isect.gauss,
-                &isect.tile_alt,
-                &isect.gauss_alt,
-                m,
-                tile_bits,
-            );
+            let ended_in_alt =
+                self.sort.record(&mut rec, &isect.tile, &isect.gauss, &isect.tile_alt, &isect.gauss_alt, m, tile_bits);
             debug_assert_eq!(ended_in_alt, sorted_in_alt);
             rec.mark("tile sort");
             rec.dispatch(
                 &self.ranges,
-                &ParamsPushU32 {
-                    params: push.params,
-                    value: m,
-                    pad: 0,
-                },
+                &ParamsPushU32 { params: push.params, value: m, pad: 0 },
                 dispatch_1d(m.div_ceil(256)),
             );
             rec.mark("tile ranges");
@@ -403,11 +359,7 @@ impl Rasterizer {
         while offset < feature_dim {
             rec.dispatch(
                 &self.blend_features,
-                &ParamsPushU32 {
-                    params: push.params,
-                    value: offset,
-                    pad: 0,
-                },
+                &ParamsPushU32 { params: push.params, value: offset, pad: 0 },
                 dispatch_1d(num_tiles),
             );
             offset += FEATURE_CHANNELS_PER_PASS;
@@ -416,7 +368,13 @@ impl Rasterizer {
             rec.mark("blend features");
         }
         timings.extend(rec.submit_and_wait()?);
+        Ok(Frame { params, num_intersections: m, timings })
+    }
 
+    /// Reads a frame's outputs back to the host.
+    pub fn read_output(&self, frame: &Frame) -> Result<RenderOutput> {
+        let image = self.image.as_ref().unwrap();
+        let (width, height, feature_dim) = (frame.params.width, frame.params.height, frame.params.feature_dim);
         let hw = (width * height) as usize;
         let g = &self.gpu;
         Ok(RenderOutput {
@@ -428,15 +386,27 @@ impl Rasterizer {
             expected_depth: image.expected_depth.download(g, hw)?,
             final_t: image.final_t.download(g, hw)?,
             n_contrib: image.n_contrib.download(g, hw)?,
-            features: if feature_dim > 0 {
-                image.features.download(g, feature_dim as usize * hw)?
-            } else {
-                Vec::new()
-            },
+            features: if feature_dim > 0 { image.features.download(g, feature_dim as usize * hw)? } else { Vec::new() },
             feature_dim,
-            num_intersections: m,
-            timings,
+            num_intersections: frame.num_intersections,
+            timings: frame.timings.clone(),
         })
+    }
+
+    /// The GPU buffers of the last frame's outputs.
+    pub fn outputs(&self) -> Option<FrameOutputs<'_>> {
+        self.image.as_ref().map(|i| FrameOutputs {
+            rgb: &i.rgb,
+            alpha: &i.alpha,
+            depth: &i.depth,
+            expected_depth: &i.expected_depth,
+            features: &i.features,
+        })
+    }
+
+    /// The parameter block of the last frame (what the backward passes read).
+    pub fn params_buffer(&self) -> &Buffer {
+        &self.params
     }
 
     fn frame_params(
@@ -504,17 +474,9 @@ impl Rasterizer {
             tan_fovy: tan_fovy as f32,
             near_plane: settings.near,
             pad0: 0.0,
-            background: [
-                settings.background[0],
-                settings.background[1],
-                settings.background[2],
-                0.0,
-            ],
+            background: [settings.background[0], settings.background[1], settings.background[2], 0.0],
             num_gaussians: scene.num_gaussians,
-            sh_degree: settings
-                .sh_degree
-                .unwrap_or(scene.sh_degree)
-                .min(scene.sh_degree),
+            sh_degree: settings.sh_degree.unwrap_or(scene.sh_degree).min(scene.sh_degree),
             sh_coeffs,
             width: camera.width,
             height: camera.height,

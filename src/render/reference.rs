@@ -36,13 +36,8 @@ pub struct ReferenceImage {
 
 pub const SH_C0: f64 = 0.28209479177387814;
 pub const SH_C1: f64 = 0.4886025119029199;
-pub const SH_C2: [f64; 5] = [
-    1.0925484305920792,
-    -1.0925484305920792,
-    0.31539156525252005,
-    -1.0925484305920792,
-    0.5462742152960396,
-];
+pub const SH_C2: [f64; 5] =
+    [1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792, 0.5462742152960396];
 pub const SH_C3: [f64; 7] = [
     -0.5900435899266435,
     2.890611442640554,
@@ -113,21 +108,9 @@ pub fn quat_to_matrix(q: [f64; 4]) -> M3 {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
     let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
     [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
+        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
     ]
 }
 
@@ -161,10 +144,7 @@ pub fn project(
     let z = pv[2];
     let tx = (pv[0] / z).clamp(-lim_x, lim_x) * z;
     let ty = (pv[1] / z).clamp(-lim_y, lim_y) * z;
-    let j = [
-        [camera.fx / z, 0.0, -camera.fx * tx / (z * z)],
-        [0.0, camera.fy / z, -camera.fy * ty / (z * z)],
-    ];
+    let j = [[camera.fx / z, 0.0, -camera.fx * tx / (z * z)], [0.0, camera.fy / z, -camera.fy * ty / (z * z)]];
     // cov2d = J cov_view J^T
     let mut c2 = [[0.0; 2]; 2];
     for a in 0..2 {
@@ -184,18 +164,12 @@ pub fn project(
         return None;
     }
     let conic = [c / det, -b / det, a / det];
-    let xy = [
-        camera.fx * pv[0] / z + camera.cx,
-        camera.fy * pv[1] / z + camera.cy,
-    ];
+    let xy = [camera.fx * pv[0] / z + camera.cx, camera.fy * pv[1] / z + camera.cy];
     let opacity = 1.0 / (1.0 + (-(scene.opacity_logits[i] as f64)).exp());
     let center = camera.center();
     let d = [m[0] - center[0], m[1] - center[1], m[2] - center[2]];
     let dn = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    let basis = sh_basis(
-        [d[0] / dn, d[1] / dn, d[2] / dn],
-        sh_degree.min(scene.sh_degree),
-    );
+    let basis = sh_basis([d[0] / dn, d[1] / dn, d[2] / dn], sh_degree.min(scene.sh_degree));
     let k = scene.sh_coeffs();
     let mut color = [0.0; 3];
     for (bi, bv) in basis.iter().enumerate().take(k) {
@@ -207,16 +181,7 @@ pub fn project(
     let r = camera.rotation[2];
     let magnitude = (0..3).map(|k| (r[k] * m[k]).abs()).sum::<f64>() + camera.translation[2].abs();
     let depth_error = 4.0 * f32::EPSILON as f64 * magnitude;
-    Some(ProjectedGaussian {
-        index: i,
-        xy,
-        conic,
-        cov2d: [a, b, c],
-        opacity,
-        depth: z,
-        depth_error,
-        color,
-    })
+    Some(ProjectedGaussian { index: i, xy, conic, cov2d: [a, b, c], opacity, depth: z, depth_error, color })
 }
 
 /// Renders with every Gaussian at every pixel. `features`: optional N x D row-major matrix.
@@ -228,15 +193,9 @@ pub fn render_reference(
     sh_degree: u32,
     features: Option<(&[f32], usize)>,
 ) -> ReferenceImage {
-    let mut gs: Vec<ProjectedGaussian> = (0..scene.len())
-        .filter_map(|i| project(scene, i, camera, near, sh_degree))
-        .collect();
-    gs.sort_by(|a, b| {
-        a.depth
-            .partial_cmp(&b.depth)
-            .unwrap()
-            .then(a.index.cmp(&b.index))
-    });
+    let mut gs: Vec<ProjectedGaussian> =
+        (0..scene.len()).filter_map(|i| project(scene, i, camera, near, sh_degree)).collect();
+    gs.sort_by(|a, b| a.depth.partial_cmp(&b.depth).unwrap().then(a.index.cmp(&b.index)));
     let (w, h) = (camera.width as usize, camera.height as usize);
     let hw = w * h;
     let d = features.map(|f| f.1).unwrap_or(0);
@@ -273,9 +232,7 @@ pub fn render_reference(
                 // float32 uncertainty of the power: rounding of its terms, and of the 2D mean
                 let terms = a.abs() * dx * dx + cc.abs() * dy * dy + 2.0 * (b * dx * dy).abs();
                 let slope = (a * dx + b * dy).abs() + (b * dx + cc * dy).abs();
-                let tol = 2e-4
-                    + 2e-6 * terms
-                    + 1e-5 * slope * (1.0 + g.xy[0].abs().max(g.xy[1].abs())) / 100.0;
+                let tol = 2e-4 + 2e-6 * terms + 1e-5 * slope * (1.0 + g.xy[0].abs().max(g.xy[1].abs())) / 100.0;
                 if (raw.ln() - ALPHA_MIN.ln()).abs() < tol {
                     ambiguous = true;
                 }

@@ -73,28 +73,10 @@ impl PrefixScan {
     fn record_level(&self, rec: &mut Recorder, data: u64, n: u32, level: usize) {
         let blocks = n.div_ceil(SCAN_BLOCK).max(1);
         let sums = &self.levels[level];
-        rec.dispatch(
-            &self.blocks,
-            &ScanPush {
-                data,
-                block_sums: sums.address(),
-                n,
-                pad: 0,
-            },
-            dispatch_1d(blocks),
-        );
+        rec.dispatch(&self.blocks, &ScanPush { data, block_sums: sums.address(), n, pad: 0 }, dispatch_1d(blocks));
         if blocks > 1 {
             self.record_level(rec, sums.address(), blocks, level + 1);
-            rec.dispatch(
-                &self.add,
-                &ScanPush {
-                    data,
-                    block_sums: sums.address(),
-                    n,
-                    pad: 0,
-                },
-                dispatch_1d(blocks),
-            );
+            rec.dispatch(&self.add, &ScanPush { data, block_sums: sums.address(), n, pad: 0 }, dispatch_1d(blocks));
         }
     }
 }

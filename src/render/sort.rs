@@ -59,12 +59,7 @@ impl RadixSort {
         }
         let n = n.max(1) + n / 4;
         let hist = n.div_ceil(BLOCK_KEYS as u64) * RADIX as u64;
-        self.histogram = Some(Buffer::new(
-            &self.gpu,
-            "radix histogram",
-            hist * 4,
-            MemoryKind::Device,
-        )?);
+        self.histogram = Some(Buffer::new(&self.gpu, "radix histogram", hist * 4, MemoryKind::Device)?);
         self.scan.reserve(hist)?;
         self.capacity = n;
         Ok(())

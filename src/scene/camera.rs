@@ -44,25 +44,14 @@ impl Camera {
 
     /// tan of half the field of view along x and y.
     pub fn tan_half_fov(&self) -> (f64, f64) {
-        (
-            0.5 * self.width as f64 / self.fx,
-            0.5 * self.height as f64 / self.fy,
-        )
+        (0.5 * self.width as f64 / self.fx, 0.5 * self.height as f64 / self.fy)
     }
 
     /// The same camera for an image resized to width x height (intrinsics scaled per axis).
     pub fn resized(&self, width: u32, height: u32) -> Camera {
         let sx = width as f64 / self.width as f64;
         let sy = height as f64 / self.height as f64;
-        Camera {
-            width,
-            height,
-            fx: self.fx * sx,
-            fy: self.fy * sy,
-            cx: self.cx * sx,
-            cy: self.cy * sy,
-            ..self.clone()
-        }
+        Camera { width, height, fx: self.fx * sx, fy: self.fy * sy, cx: self.cx * sx, cy: self.cy * sy, ..self.clone() }
     }
 
     /// A camera at `eye` looking at `target` with `up` pointing roughly up in the image (-y).
@@ -81,11 +70,7 @@ impl Camera {
             [a[0] / l, a[1] / l, a[2] / l]
         };
         let cross = |a: [f64; 3], b: [f64; 3]| {
-            [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ]
+            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
         };
         let z = norm(sub(target, eye));
         let x = norm(cross(z, up)); // right, when y points down
@@ -116,21 +101,9 @@ pub fn rotation_from_qvec(q: [f64; 4]) -> [[f64; 3]; 3] {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
     let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
     [
-        [
-            1.0 - 2.0 * (y * y + z * z),
-            2.0 * (x * y - w * z),
-            2.0 * (x * z + w * y),
-        ],
-        [
-            2.0 * (x * y + w * z),
-            1.0 - 2.0 * (x * x + z * z),
-            2.0 * (y * z - w * x),
-        ],
-        [
-            2.0 * (x * z - w * y),
-            2.0 * (y * z + w * x),
-            1.0 - 2.0 * (x * x + y * y),
-        ],
+        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
     ]
 }
 
@@ -149,28 +122,19 @@ struct JsonCamera {
 
 /// Reads INRIA `cameras.json`: camera-to-world rotation and camera center, principal point centered.
 pub fn read_cameras_json(path: &Path) -> Result<Vec<Camera>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?;
-    let list: Vec<JsonCamera> = serde_json::from_str(&text)
-        .with_context(|| format!("{}: not an INRIA cameras.json", path.display()))?;
+    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let list: Vec<JsonCamera> =
+        serde_json::from_str(&text).with_context(|| format!("{}: not an INRIA cameras.json", path.display()))?;
     if list.is_empty() {
         bail!("{}: no cameras", path.display());
     }
     list.into_iter()
         .map(|c| {
             if c.width == 0 || c.height == 0 || !(c.fx > 0.0 && c.fy > 0.0) {
-                return Err(anyhow!(
-                    "{}: camera {:?} has invalid size or focal length",
-                    path.display(),
-                    c.img_name
-                ));
+                return Err(anyhow!("{}: camera {:?} has invalid size or focal length", path.display(), c.img_name));
             }
             let r = c.rotation; // camera to world
-            let rotation = [
-                [r[0][0], r[1][0], r[2][0]],
-                [r[0][1], r[1][1], r[2][1]],
-                [r[0][2], r[1][2], r[2][2]],
-            ];
+            let rotation = [[r[0][0], r[1][0], r[2][0]], [r[0][1], r[1][1], r[2][1]], [r[0][2], r[1][2], r[2][2]]];
             let p = c.position;
             let translation = [
                 -(rotation[0][0] * p[0] + rotation[0][1] * p[1] + rotation[0][2] * p[2]),
@@ -205,11 +169,7 @@ pub fn write_cameras_json(cameras: &[Camera], path: &Path) -> Result<()> {
                 width: c.width,
                 height: c.height,
                 position: c.center(),
-                rotation: [
-                    [r[0][0], r[1][0], r[2][0]],
-                    [r[0][1], r[1][1], r[2][1]],
-                    [r[0][2], r[1][2], r[2][2]],
-                ],
+                rotation: [[r[0][0], r[1][0], r[2][0]], [r[0][1], r[1][1], r[2][1]], [r[0][2], r[1][2], r[2][2]]],
                 fx: c.fx,
                 fy: c.fy,
             }

@@ -38,10 +38,7 @@ pub fn find_model_dir(dir: &Path) -> Result<PathBuf> {
             return Ok(cand);
         }
     }
-    bail!(
-        "{}: no COLMAP model (cameras.bin/.txt) here or in sparse/0",
-        dir.display()
-    )
+    bail!("{}: no COLMAP model (cameras.bin/.txt) here or in sparse/0", dir.display())
 }
 
 /// Number of parameters of a COLMAP camera model id, and its name.
@@ -90,14 +87,7 @@ fn to_pinhole(
     if width == 0 || height == 0 || !(fx > 0.0 && fy > 0.0) {
         bail!("{what}: camera with invalid size {width}x{height} or focal length");
     }
-    Ok(Intrinsics {
-        width,
-        height,
-        fx,
-        fy,
-        cx,
-        cy,
-    })
+    Ok(Intrinsics { width, height, fx, fy, cx, cy })
 }
 
 struct Bin<'a> {
@@ -152,54 +142,31 @@ fn read_cameras(dir: &Path, warnings: &mut Vec<String>) -> Result<HashMap<i64, I
             }
             let w: Vec<&str> = line.split_whitespace().collect();
             if w.len() < 4 {
-                bail!(
-                    "{what}:{}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]",
-                    ln + 1
-                );
+                bail!("{what}:{}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]", ln + 1);
             }
             let parse_err = || anyhow!("{what}:{}: unparsable camera line", ln + 1);
             let id: i64 = w[0].parse().map_err(|_| parse_err())?;
             let width: u32 = w[2].parse().map_err(|_| parse_err())?;
             let height: u32 = w[3].parse().map_err(|_| parse_err())?;
-            let params: Vec<f64> = w[4..]
-                .iter()
-                .map(|s| s.parse())
-                .collect::<Result<_, _>>()
-                .map_err(|_| parse_err())?;
-            out.insert(
-                id,
-                to_pinhole(
-                    &format!("{what}:{}", ln + 1),
-                    w[1],
-                    width,
-                    height,
-                    &params,
-                    warnings,
-                )?,
-            );
+            let params: Vec<f64> =
+                w[4..].iter().map(|s| s.parse()).collect::<Result<_, _>>().map_err(|_| parse_err())?;
+            out.insert(id, to_pinhole(&format!("{what}:{}", ln + 1), w[1], width, height, &params, warnings)?);
         }
     } else {
         let path = dir.join("cameras.bin");
         let what = path.display().to_string();
         let data = read_bytes(&path)?;
-        let mut b = Bin {
-            data: &data,
-            pos: 0,
-            what: &what,
-        };
+        let mut b = Bin { data: &data, pos: 0, what: &what };
         let n = b.u64()?;
         for _ in 0..n {
             let id = b.i32()? as i64;
             let model_id = b.i32()?;
-            let (model, np) = model_info(model_id)
-                .ok_or_else(|| anyhow!("{what}: unknown camera model id {model_id}"))?;
+            let (model, np) =
+                model_info(model_id).ok_or_else(|| anyhow!("{what}: unknown camera model id {model_id}"))?;
             let width = b.u64()? as u32;
             let height = b.u64()? as u32;
             let params: Vec<f64> = (0..np).map(|_| b.f64()).collect::<Result<_>>()?;
-            out.insert(
-                id,
-                to_pinhole(&what, model, width, height, &params, warnings)?,
-            );
+            out.insert(id, to_pinhole(&what, model, width, height, &params, warnings)?);
         }
     }
     if out.is_empty() {
@@ -222,11 +189,7 @@ fn read_images(dir: &Path) -> Result<Vec<ImageEntry>> {
         let what = txt.display().to_string();
         let text = std::fs::read_to_string(&txt).with_context(|| format!("{what}: cannot read"))?;
         // Two lines per image; the second (points) may be empty, so count non-comment lines strictly.
-        let lines: Vec<(usize, &str)> = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.starts_with('#'))
-            .collect();
+        let lines: Vec<(usize, &str)> = text.lines().enumerate().filter(|(_, l)| !l.starts_with('#')).collect();
         let mut i = 0;
         while i < lines.len() {
             let (ln, line) = lines[i];
@@ -236,21 +199,13 @@ fn read_images(dir: &Path) -> Result<Vec<ImageEntry>> {
             }
             let w: Vec<&str> = line.split_whitespace().collect();
             if w.len() < 10 {
-                bail!(
-                    "{what}:{}: expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME",
-                    ln + 1
-                );
+                bail!("{what}:{}: expected IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME", ln + 1);
             }
-            let f = |s: &str| {
-                s.parse::<f64>()
-                    .map_err(|_| anyhow!("{what}:{}: unparsable number {s:?}", ln + 1))
-            };
+            let f = |s: &str| s.parse::<f64>().map_err(|_| anyhow!("{what}:{}: unparsable number {s:?}", ln + 1));
             out.push(ImageEntry {
                 qvec: [f(w[1])?, f(w[2])?, f(w[3])?, f(w[4])?],
                 tvec: [f(w[5])?, f(w[6])?, f(w[7])?],
-                camera_id: w[8]
-                    .parse()
-                    .map_err(|_| anyhow!("{what}:{}: bad camera id", ln + 1))?,
+                camera_id: w[8].parse().map_err(|_| anyhow!("{what}:{}: bad camera id", ln + 1))?,
                 name: w[9..].join(" "),
             });
             i += 2; // skip the points line
@@ -259,11 +214,7 @@ fn read_images(dir: &Path) -> Result<Vec<ImageEntry>> {
         let path = dir.join("images.bin");
         let what = path.display().to_string();
         let data = read_bytes(&path)?;
-        let mut b = Bin {
-            data: &data,
-            pos: 0,
-            what: &what,
-        };
+        let mut b = Bin { data: &data, pos: 0, what: &what };
         let n = b.u64()?;
         for _ in 0..n {
             let _id = b.i32()?;
@@ -273,12 +224,7 @@ fn read_images(dir: &Path) -> Result<Vec<ImageEntry>> {
             let name = b.string()?;
             let np = b.u64()? as usize;
             b.take(np * 24)?;
-            out.push(ImageEntry {
-                name,
-                qvec,
-                tvec,
-                camera_id,
-            });
+            out.push(ImageEntry { name, qvec, tvec, camera_id });
         }
     }
     Ok(out)
@@ -303,19 +249,12 @@ fn read_points(dir: &Path) -> Result<Vec<Point3D>> {
             let err = || anyhow!("{what}:{}: unparsable point", ln + 1);
             let f = |s: &str| s.parse::<f64>().map_err(|_| err());
             let u = |s: &str| s.parse::<u8>().map_err(|_| err());
-            out.push(Point3D {
-                xyz: [f(w[1])?, f(w[2])?, f(w[3])?],
-                rgb: [u(w[4])?, u(w[5])?, u(w[6])?],
-            });
+            out.push(Point3D { xyz: [f(w[1])?, f(w[2])?, f(w[3])?], rgb: [u(w[4])?, u(w[5])?, u(w[6])?] });
         }
     } else if bin.exists() {
         let what = bin.display().to_string();
         let data = read_bytes(&bin)?;
-        let mut b = Bin {
-            data: &data,
-            pos: 0,
-            what: &what,
-        };
+        let mut b = Bin { data: &data, pos: 0, what: &what };
         let n = b.u64()?;
         for _ in 0..n {
             b.u64()?;
@@ -346,17 +285,9 @@ pub fn read_colmap(dir: &Path) -> Result<ColmapModel> {
         .iter()
         .map(|im| {
             let k = intrinsics.get(&im.camera_id).ok_or_else(|| {
-                anyhow!(
-                    "{}: image {:?} refers to missing camera {}",
-                    model_dir.display(),
-                    im.name,
-                    im.camera_id
-                )
+                anyhow!("{}: image {:?} refers to missing camera {}", model_dir.display(), im.name, im.camera_id)
             })?;
-            let stem = Path::new(&im.name)
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
+            let stem = Path::new(&im.name).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
             Ok(Camera {
                 name: stem,
                 width: k.width,
@@ -371,9 +302,5 @@ pub fn read_colmap(dir: &Path) -> Result<ColmapModel> {
         })
         .collect::<Result<Vec<_>>>()?;
     let points = read_points(&model_dir)?;
-    Ok(ColmapModel {
-        cameras,
-        points,
-        warnings,
-    })
+    Ok(ColmapModel { cameras, points, warnings })
 }

@@ -88,9 +88,7 @@ impl GaussianScene {
                 && self.log_scales[i].iter().all(|v| v.is_finite())
                 && self.quats[i].iter().all(|v| v.is_finite())
                 && self.opacity_logits[i].is_finite()
-                && self.sh[i * k * 3..(i + 1) * k * 3]
-                    .iter()
-                    .all(|v| v.is_finite());
+                && self.sh[i * k * 3..(i + 1) * k * 3].iter().all(|v| v.is_finite());
             if !finite {
                 bail!("{what}: Gaussian {i} has a NaN or infinite parameter");
             }
@@ -105,11 +103,7 @@ impl GaussianScene {
     /// The extra properties `{prefix}0..{prefix}{D-1}` as an N x D row-major matrix, if present.
     pub fn feature_matrix(&self, prefix: &str) -> Option<(Vec<f32>, usize)> {
         let mut columns = Vec::new();
-        while let Some(p) = self
-            .extras
-            .iter()
-            .find(|e| e.name == format!("{prefix}{}", columns.len()))
-        {
+        while let Some(p) = self.extras.iter().find(|e| e.name == format!("{prefix}{}", columns.len())) {
             columns.push(p);
         }
         if columns.is_empty() {

@@ -49,11 +49,7 @@ impl PlyType {
         macro_rules! get {
             ($t:ty, $n:expr) => {{
                 let a: [u8; $n] = b[..$n].try_into().unwrap();
-                (if little {
-                    <$t>::from_le_bytes(a)
-                } else {
-                    <$t>::from_be_bytes(a)
-                }) as f64
+                (if little { <$t>::from_le_bytes(a) } else { <$t>::from_be_bytes(a) }) as f64
             }};
         }
         match self {
@@ -103,8 +99,7 @@ enum Slot {
 
 /// Reads an INRIA-layout Gaussian PLY. Errors name the file and what is wrong with it.
 pub fn read_ply(path: &Path) -> Result<GaussianScene> {
-    let file =
-        std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
+    let file = std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
     let mut reader = BufReader::with_capacity(1 << 20, file);
     read_ply_from(&mut reader, &path.display().to_string())
 }
@@ -114,9 +109,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
     let mut line = String::new();
     let mut next_line = |reader: &mut R| -> Result<String> {
         line.clear();
-        let n = reader
-            .read_line(&mut line)
-            .with_context(|| format!("{what}: read error in the PLY header"))?;
+        let n = reader.read_line(&mut line).with_context(|| format!("{what}: read error in the PLY header"))?;
         if n == 0 {
             bail!("{what}: the PLY header ends before end_header");
         }
@@ -144,9 +137,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
             }
             ["comment", ..] | ["obj_info", ..] | [] => {}
             ["element", name, n] => {
-                let n: usize = n
-                    .parse()
-                    .map_err(|_| anyhow!("{what}: bad element count in {l:?}"))?;
+                let n: usize = n.parse().map_err(|_| anyhow!("{what}: bad element count in {l:?}"))?;
                 if *name == "vertex" {
                     if count.is_some() {
                         bail!("{what}: more than one vertex element");
@@ -167,8 +158,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
             }
             ["property", ty, name] => {
                 if in_vertex {
-                    let t = PlyType::parse(ty)
-                        .ok_or_else(|| anyhow!("{what}: unknown property type {ty:?}"))?;
+                    let t = PlyType::parse(ty).ok_or_else(|| anyhow!("{what}: unknown property type {ty:?}"))?;
                     if props.iter().any(|(n, _)| n == name) {
                         bail!("{what}: property {name:?} appears twice");
                     }
@@ -184,16 +174,14 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
     // map properties to attributes
     let find = |name: &str| props.iter().position(|(p, _)| p == name);
     for req in [
-        "x", "y", "z", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2",
-        "rot_3", "f_dc_0", "f_dc_1", "f_dc_2",
+        "x", "y", "z", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3", "f_dc_0",
+        "f_dc_1", "f_dc_2",
     ] {
         if find(req).is_none() {
             bail!("{what}: missing required property {req:?} (not an INRIA Gaussian PLY?)");
         }
     }
-    let n_rest = (0..)
-        .take_while(|i| find(&format!("f_rest_{i}")).is_some())
-        .count();
+    let n_rest = (0..).take_while(|i| find(&format!("f_rest_{i}")).is_some()).count();
     let sh_degree = match n_rest {
         0 => 0,
         9 => 1,
@@ -206,10 +194,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
     let slots: Vec<Slot> = props
         .iter()
         .map(|(name, ty)| {
-            let idx = |prefix: &str| {
-                name.strip_prefix(prefix)
-                    .and_then(|s| s.parse::<usize>().ok())
-            };
+            let idx = |prefix: &str| name.strip_prefix(prefix).and_then(|s| s.parse::<usize>().ok());
             match name.as_str() {
                 "x" => Slot::Mean(0),
                 "y" => Slot::Mean(1),
@@ -228,11 +213,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
                     } else if let Some(i) = idx("f_rest_").filter(|&i| i < n_rest) {
                         Slot::Rest(i)
                     } else {
-                        extras.push(ExtraProperty {
-                            name: name.clone(),
-                            ty: *ty,
-                            values: Vec::with_capacity(n),
-                        });
+                        extras.push(ExtraProperty { name: name.clone(), ty: *ty, values: Vec::with_capacity(n) });
                         Slot::Extra(extras.len() - 1)
                     }
                 }
@@ -268,25 +249,20 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
     match format {
         Format::Ascii => {
             let mut text = String::new();
-            reader
-                .read_to_string(&mut text)
-                .with_context(|| format!("{what}: read error"))?;
+            reader.read_to_string(&mut text).with_context(|| format!("{what}: read error"))?;
             let mut tokens = text.split_ascii_whitespace();
             for i in 0..n {
                 for (j, slot) in slots.iter().enumerate() {
-                    let tok = tokens.next().ok_or_else(|| {
-                        anyhow!("{what}: file ends in vertex {i} of {n} (truncated PLY)")
-                    })?;
+                    let tok = tokens
+                        .next()
+                        .ok_or_else(|| anyhow!("{what}: file ends in vertex {i} of {n} (truncated PLY)"))?;
                     // float properties are parsed as f32 directly: going through f64 could round twice
                     let parsed = match props[j].1 {
                         PlyType::F32 => tok.parse::<f32>().map(|v| v as f64).ok(),
                         _ => tok.parse::<f64>().ok(),
                     };
                     let v = parsed.ok_or_else(|| {
-                        anyhow!(
-                            "{what}: vertex {i}: property {:?} has unparsable value {tok:?}",
-                            props[j].0
-                        )
+                        anyhow!("{what}: vertex {i}: property {:?} has unparsable value {tok:?}", props[j].0)
                     })?;
                     store(&mut scene, i, slot, v);
                 }
@@ -310,10 +286,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
                 let chunk = &mut buf[..rows * stride];
                 if let Err(e) = reader.read_exact(chunk) {
                     if e.kind() == std::io::ErrorKind::UnexpectedEof {
-                        bail!(
-                            "{what}: file ends within vertices {i}..{} of {n} (truncated PLY)",
-                            i + rows
-                        );
+                        bail!("{what}: file ends within vertices {i}..{} of {n} (truncated PLY)", i + rows);
                     }
                     return Err(e).with_context(|| format!("{what}: read error"));
                 }
@@ -337,12 +310,8 @@ pub fn encode_ply(scene: &GaussianScene) -> Vec<u8> {
     let k = scene.sh_coeffs();
     let mut header = String::from("ply\nformat binary_little_endian 1.0\n");
     header += &format!("element vertex {n}\n");
-    let mut names: Vec<String> = [
-        "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let mut names: Vec<String> =
+        ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"].iter().map(|s| s.to_string()).collect();
     names.extend((0..3 * (k - 1)).map(|i| format!("f_rest_{i}")));
     names.push("opacity".into());
     names.extend((0..3).map(|i| format!("scale_{i}")));

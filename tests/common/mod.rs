@@ -24,23 +24,14 @@ impl Drop for TestGpu {
             return;
         }
         let messages = self.0.validation_messages();
-        assert!(
-            messages.is_empty(),
-            "Vulkan validation messages:\n{}",
-            messages.join("\n")
-        );
+        assert!(messages.is_empty(), "Vulkan validation messages:\n{}", messages.join("\n"));
     }
 }
 
 /// Validation is on unless COGEO_VALIDATE=0 is set explicitly.
 pub fn gpu() -> TestGpu {
-    let validate = std::env::var("COGEO_VALIDATE")
-        .map(|v| v != "0")
-        .unwrap_or(true);
-    let choice = DeviceChoice {
-        selector: std::env::var("COGEO_DEVICE").ok(),
-        validate,
-    };
+    let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
+    let choice = DeviceChoice { selector: std::env::var("COGEO_DEVICE").ok(), validate };
     let gpu = Gpu::new(&choice).expect("cannot create the Vulkan context (is lavapipe installed?)");
     if validate {
         assert!(gpu.validating());
@@ -49,11 +40,7 @@ pub fn gpu() -> TestGpu {
 }
 
 pub fn shared_data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("shared")
-        .join("data")
-        .join(rel);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("shared").join("data").join(rel);
     p.exists().then_some(p)
 }
 
@@ -74,48 +61,25 @@ pub struct SceneMix {
 
 impl Default for SceneMix {
     fn default() -> Self {
-        SceneMix {
-            normal: 160,
-            tiny: 40,
-            huge: 6,
-            behind: 20,
-            faint: 40,
-            opaque: 30,
-        }
+        SceneMix { normal: 160, tiny: 40, huge: 6, behind: 20, faint: 40, opaque: 30 }
     }
 }
 
 /// A camera at (0, 0, -4) looking at the origin (+z forward, +y down).
 pub fn test_camera(width: u32, height: u32) -> Camera {
-    Camera::look_at(
-        "cam",
-        width,
-        height,
-        60.0,
-        [0.3, -0.2, -4.0],
-        [0.0, 0.0, 0.0],
-        [0.0, -1.0, 0.0],
-    )
+    Camera::look_at("cam", width, height, 60.0, [0.3, -0.2, -4.0], [0.0, 0.0, 0.0], [0.0, -1.0, 0.0])
 }
 
 /// A seeded random scene around the origin, visible from `test_camera`.
 pub fn random_scene(seed: u64, sh_degree: u32, mix: SceneMix) -> GaussianScene {
     let mut rng = Rng::new(seed);
-    let mut scene = GaussianScene {
-        sh_degree,
-        ..Default::default()
-    };
+    let mut scene = GaussianScene { sh_degree, ..Default::default() };
     let k = scene.sh_coeffs();
     let mut add = |rng: &mut Rng, pos: [f64; 3], log_scale: [f64; 3], opacity_logit: f32| {
         scene.means.push(pos.map(|v| v as f32));
         scene.normals.push([0.0; 3]);
         scene.log_scales.push(log_scale.map(|v| v as f32));
-        scene.quats.push([
-            rng.normal() as f32,
-            rng.normal() as f32,
-            rng.normal() as f32,
-            rng.normal() as f32,
-        ]);
+        scene.quats.push([rng.normal() as f32, rng.normal() as f32, rng.normal() as f32, rng.normal() as f32]);
         scene.opacity_logits.push(opacity_logit);
         for b in 0..k {
             for _ in 0..3 {
@@ -124,30 +88,16 @@ pub fn random_scene(seed: u64, sh_degree: u32, mix: SceneMix) -> GaussianScene {
             }
         }
     };
-    let spread = |rng: &mut Rng| {
-        [
-            rng.range(-2.0, 2.0),
-            rng.range(-1.5, 1.5),
-            rng.range(-1.5, 2.0),
-        ]
-    };
+    let spread = |rng: &mut Rng| [rng.range(-2.0, 2.0), rng.range(-1.5, 1.5), rng.range(-1.5, 2.0)];
     for _ in 0..mix.normal {
         let p = spread(&mut rng);
-        let s = [
-            rng.range(-3.5, -1.2),
-            rng.range(-3.5, -1.2),
-            rng.range(-3.5, -1.2),
-        ];
+        let s = [rng.range(-3.5, -1.2), rng.range(-3.5, -1.2), rng.range(-3.5, -1.2)];
         let o = rng.range(-2.0, 3.0) as f32;
         add(&mut rng, p, s, o);
     }
     for _ in 0..mix.tiny {
         let p = spread(&mut rng);
-        let s = [
-            rng.range(-9.0, -6.0),
-            rng.range(-9.0, -6.0),
-            rng.range(-9.0, -6.0),
-        ];
+        let s = [rng.range(-9.0, -6.0), rng.range(-9.0, -6.0), rng.range(-9.0, -6.0)];
         let o = rng.range(0.0, 4.0) as f32;
         add(&mut rng, p, s, o);
     }
@@ -155,45 +105,25 @@ pub fn random_scene(seed: u64, sh_degree: u32, mix: SceneMix) -> GaussianScene {
         // large but with anisotropy below 10, so float32 stays well conditioned
         let p = spread(&mut rng);
         let base = rng.range(0.0, 1.0);
-        let s = [
-            base + rng.range(-1.0, 1.0),
-            base + rng.range(-1.0, 1.0),
-            base + rng.range(-1.0, 1.0),
-        ];
+        let s = [base + rng.range(-1.0, 1.0), base + rng.range(-1.0, 1.0), base + rng.range(-1.0, 1.0)];
         let o = rng.range(-4.0, -1.0) as f32;
         add(&mut rng, p, s, o);
     }
     for _ in 0..mix.behind {
-        let p = [
-            rng.range(-2.0, 2.0),
-            rng.range(-2.0, 2.0),
-            rng.range(-8.0, -4.05),
-        ];
-        let s = [
-            rng.range(-2.0, 0.0),
-            rng.range(-2.0, 0.0),
-            rng.range(-2.0, 0.0),
-        ];
+        let p = [rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), rng.range(-8.0, -4.05)];
+        let s = [rng.range(-2.0, 0.0), rng.range(-2.0, 0.0), rng.range(-2.0, 0.0)];
         add(&mut rng, p, s, 2.0);
     }
     for _ in 0..mix.faint {
         // opacity within a few percent of 1/255, on both sides
         let p = spread(&mut rng);
-        let s = [
-            rng.range(-2.5, -1.0),
-            rng.range(-2.5, -1.0),
-            rng.range(-2.5, -1.0),
-        ];
+        let s = [rng.range(-2.5, -1.0), rng.range(-2.5, -1.0), rng.range(-2.5, -1.0)];
         let o = logit(rng.range(0.9, 1.1) / 255.0);
         add(&mut rng, p, s, o);
     }
     for _ in 0..mix.opaque {
         let p = spread(&mut rng);
-        let s = [
-            rng.range(-3.0, -1.5),
-            rng.range(-3.0, -1.5),
-            rng.range(-3.0, -1.5),
-        ];
+        let s = [rng.range(-3.0, -1.5), rng.range(-3.0, -1.5), rng.range(-3.0, -1.5)];
         let o = logit(1.0 - rng.range(1e-5, 1e-3));
         add(&mut rng, p, s, o);
     }

@@ -1,0 +1,269 @@
+//! Backward passes of the rasterizer: blend_backward.comp (per-pixel, back to front, subgroup-reduced
+//! atomics into per-view gradients of the projected quantities), project_backward.comp (chain rule
+//! to the stored parameters, accumulated over views) and blend_features_backward.comp. Each has a
+//! `_cas` twin that accumulates with compare-and-swap on devices without float atomics.
+
+use super::params::RenderParams;
+use super::SceneBuffers;
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
+use crate::shaders;
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+/// Mirrors `shaders/glsl/include/backward_params.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct BackwardParams {
+    pub dl_drgb: u64,
+    pub dl_dalpha: u64,
+    pub dl_ddepth: u64,
+    pub dl_dexpected_depth: u64,
+    pub dl_dfeatures: u64,
+    pub grad_xy: u64,
+    pub grad_conic: u64,
+    pub grad_opacity: u64,
+    pub grad_color: u64,
+    pub grad_depth: u64,
+    pub grad_features: u64,
+    pub grad_means: u64,
+    pub grad_log_scales: u64,
+    pub grad_quats: u64,
+    pub grad_opacity_logits: u64,
+    pub grad_sh: u64,
+    pub grad_xy_norm_sum: u64,
+    pub grad_xy_views: u64,
+    pub use_alpha: u32,
+    pub use_depth: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct BackwardPush {
+    render: u64,
+    backward: u64,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct FeatureBackwardPush {
+    render: u64,
+    backward: u64,
+    channel_offset: u32,
+    pad: u32,
+}
+
+/// Gradients of a scene's stored parameters (accumulated over the views of a step), plus the
+/// densification statistics. Same layouts as `SceneBuffers`.
+pub struct SceneGradients {
+    pub means: Buffer,
+    pub log_scales: Buffer,
+    pub quats: Buffer,
+    pub opacity_logits: Buffer,
+    pub sh: Buffer,
+    /// N x D, when the scene has features.
+    pub features: Option<Buffer>,
+    /// Sum over views of |dL/d(mean2d)| in NDC units.
+    pub xy_norm_sum: Buffer,
+    /// Number of views in which each Gaussian was visible.
+    pub xy_views: Buffer,
+    pub num_gaussians: u32,
+}
+
+impl SceneGradients {
+    pub fn new(gpu: &Gpu, scene: &SceneBuffers) -> Result<SceneGradients> {
+        let n = scene.num_gaussians as u64;
+        let k = ((scene.sh_degree + 1) * (scene.sh_degree + 1)) as u64;
+        let buf = |name: &str, per: u64| Buffer::new(gpu, name, n * per * 4, MemoryKind::Device);
+        let grads = SceneGradients {
+            means: buf("grad means", 3)?,
+            log_scales: buf("grad log_scales", 3)?,
+            quats: buf("grad quats", 4)?,
+            opacity_logits: buf("grad opacity_logits", 1)?,
+            sh: buf("grad sh", 3 * k)?,
+            features: if scene.feature_dim > 0 { Some(buf("grad features", scene.feature_dim as u64)?) } else { None },
+            xy_norm_sum: buf("grad xy norm sum", 1)?,
+            xy_views: buf("grad xy views", 1)?,
+            num_gaussians: scene.num_gaussians,
+        };
+        let mut rec = Recorder::new(gpu)?;
+        grads.record_zero(&mut rec);
+        rec.submit_and_wait()?;
+        Ok(grads)
+    }
+
+    fn all(&self) -> impl Iterator<Item = &Buffer> {
+        [&self.means, &self.log_scales, &self.quats, &self.opacity_logits, &self.sh, &self.xy_norm_sum, &self.xy_views]
+            .into_iter()
+            .chain(self.features.as_ref())
+    }
+
+    /// Records zeroing of every gradient (before a new optimization step).
+    pub fn record_zero(&self, rec: &mut Recorder) {
+        for b in self.all() {
+            rec.fill(b, 0, b.size(), 0);
+        }
+    }
+
+    /// Records zeroing of the parameter gradients only (keeps the densification statistics).
+    pub fn record_zero_parameters(&self, rec: &mut Recorder) {
+        for b in [&self.means, &self.log_scales, &self.quats, &self.opacity_logits, &self.sh]
+            .into_iter()
+            .chain(self.features.as_ref())
+        {
+            rec.fill(b, 0, b.size(), 0);
+        }
+    }
+}
+
+/// Upstream gradients dL/d(image), planar like `RenderOutput` (width * height per plane).
+pub struct PixelGradients<'a> {
+    pub rgb: &'a Buffer,
+    pub alpha: Option<&'a Buffer>,
+    pub depth: Option<&'a Buffer>,
+    pub expected_depth: Option<&'a Buffer>,
+    pub features: Option<&'a Buffer>,
+}
+
+/// Per-view gradients of the projected quantities (zero between views: the projection backward
+/// pass clears what it consumed).
+struct ViewGradients {
+    capacity: u32,
+    xy: Buffer,
+    conic: Buffer,
+    opacity: Buffer,
+    color: Buffer,
+    depth: Buffer,
+}
+
+pub struct Backward {
+    gpu: Gpu,
+    blend: ComputePipeline,
+    project: ComputePipeline,
+    features: ComputePipeline,
+    params: Buffer,
+    view: Option<ViewGradients>,
+    /// Compare-and-swap accumulation instead of float atomics.
+    pub uses_cas: bool,
+}
+
+impl Backward {
+    /// `force_cas` selects the compare-and-swap variants even where float atomics exist (tests).
+    pub fn new(gpu: &Gpu, force_cas: bool) -> Result<Backward> {
+        let cas = force_cas || !gpu.info().float_atomic_add;
+        let (blend, project, features) = if cas {
+            (shaders::BLEND_BACKWARD_CAS, shaders::PROJECT_BACKWARD_CAS, shaders::BLEND_FEATURES_BACKWARD_CAS)
+        } else {
+            (shaders::BLEND_BACKWARD, shaders::PROJECT_BACKWARD, shaders::BLEND_FEATURES_BACKWARD)
+        };
+        Ok(Backward {
+            gpu: gpu.clone(),
+            blend: ComputePipeline::new(gpu, "blend_backward", blend)?,
+            project: ComputePipeline::new(gpu, "project_backward", project)?,
+            features: ComputePipeline::new(gpu, "blend_features_backward", features)?,
+            params: Buffer::new(
+                gpu,
+                "backward params",
+                std::mem::size_of::<BackwardParams>() as u64,
+                MemoryKind::Upload,
+            )?,
+            view: None,
+            uses_cas: cas,
+        })
+    }
+
+    fn reserve(&mut self, n: u32) -> Result<()> {
+        if self.view.as_ref().is_some_and(|v| v.capacity >= n) {
+            return Ok(());
+        }
+        self.view = None;
+        let cap = n.max(1024) as u64;
+        let buf = |name: &str, per: u64| Buffer::new(&self.gpu, name, cap * per * 4, MemoryKind::Device);
+        let view = ViewGradients {
+            capacity: cap as u32,
+            xy: buf("view grad xy", 2)?,
+            conic: buf("view grad conic", 3)?,
+            opacity: buf("view grad opacity", 1)?,
+            color: buf("view grad color", 3)?,
+            depth: buf("view grad depth", 1)?,
+        };
+        let mut rec = Recorder::new(&self.gpu)?;
+        for b in [&view.xy, &view.conic, &view.opacity, &view.color, &view.depth] {
+            rec.fill(b, 0, b.size(), 0);
+        }
+        rec.submit_and_wait()?;
+        self.view = Some(view);
+        Ok(())
+    }
+
+    /// Records the backward of the last forward pass whose parameter block is `render_params` (the
+    /// rasterizer's, still holding that frame): pixel gradients to per-view projected gradients,
+    /// then to `grads` (accumulated). `features_only` skips the geometry and color passes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &mut self,
+        rec: &mut Recorder,
+        render_params: &Buffer,
+        frame: &RenderParams,
+        upstream: &PixelGradients,
+        grads: &SceneGradients,
+        features_only: bool,
+    ) -> Result<()> {
+        self.reserve(frame.num_gaussians)?;
+        let v = self.view.as_ref().unwrap();
+        let params = BackwardParams {
+            dl_drgb: upstream.rgb.address(),
+            dl_dalpha: upstream.alpha.map_or(0, |b| b.address()),
+            dl_ddepth: upstream.depth.map_or(0, |b| b.address()),
+            dl_dexpected_depth: upstream.expected_depth.map_or(0, |b| b.address()),
+            dl_dfeatures: upstream.features.map_or(0, |b| b.address()),
+            grad_xy: v.xy.address(),
+            grad_conic: v.conic.address(),
+            grad_opacity: v.opacity.address(),
+            grad_color: v.color.address(),
+            grad_depth: v.depth.address(),
+            grad_features: grads.features.as_ref().map_or(0, |b| b.address()),
+            grad_means: grads.means.address(),
+            grad_log_scales: grads.log_scales.address(),
+            grad_quats: grads.quats.address(),
+            grad_opacity_logits: grads.opacity_logits.address(),
+            grad_sh: grads.sh.address(),
+            grad_xy_norm_sum: grads.xy_norm_sum.address(),
+            grad_xy_views: grads.xy_views.address(),
+            use_alpha: upstream.alpha.is_some() as u32,
+            use_depth: (upstream.depth.is_some() && upstream.expected_depth.is_some()) as u32,
+            pad0: 0,
+            pad1: 0,
+        };
+        if (upstream.depth.is_some()) != (upstream.expected_depth.is_some()) {
+            anyhow::bail!(
+                "depth and expected-depth gradients must be given together (pass a zero buffer for the unused one)"
+            );
+        }
+        self.params.write_pod(&params)?;
+        let push = BackwardPush { render: render_params.address(), backward: self.params.address() };
+        let tiles = frame.tiles_x * frame.tiles_y;
+        if !features_only {
+            rec.dispatch(&self.blend, &push, dispatch_1d(tiles));
+            rec.mark("blend backward");
+            rec.dispatch(&self.project, &push, dispatch_1d(frame.num_gaussians.div_ceil(256)));
+            rec.mark("project backward");
+        }
+        if let (Some(_), Some(_)) = (upstream.features, grads.features.as_ref()) {
+            let mut offset = 0;
+            while offset < frame.feature_dim {
+                let p = FeatureBackwardPush {
+                    render: push.render,
+                    backward: push.backward,
+                    channel_offset: offset,
+                    pad: 0,
+                };
+                rec.dispatch(&self.features, &p, dispatch_1d(tiles));
+                offset += 32;
+            }
+            rec.mark("features backward");
+        }
+        Ok(())
+    }
+}
