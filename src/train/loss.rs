@@ -1,0 +1,297 @@
+//! The photometric loss on the GPU: (1 - lambda) L1 + lambda (1 - SSIM), SSIM with an 11x11 Gaussian
+//! window (sigma 1.5, zero padding) as in the INRIA reference, optional per-pixel mask, and its
+//! gradient with respect to the rendered image (blur.comp, ssim_products.comp, ssim_terms.comp,
+//! loss_grad.comp). `reference` has the f64 CPU twin the tests compare against.
+
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
+use crate::shaders;
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+pub const SSIM_LAMBDA: f32 = 0.2;
+const CHANNELS: u32 = 3;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct BlurPush {
+    src: u64,
+    dst: u64,
+    width: u32,
+    height: u32,
+    planes: u32,
+    vertical: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ProductsPush {
+    render: u64,
+    target: u64,
+    products: u64,
+    hw: u32,
+    channels: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct TermsPush {
+    stats: u64,
+    terms: u64,
+    ssim_map: u64,
+    mask: u64,
+    hw: u32,
+    channels: u32,
+    inv_weight_sum: f32,
+    has_mask: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GradPush {
+    render: u64,
+    target: u64,
+    blurred_terms: u64,
+    dl_dx: u64,
+    l1_map: u64,
+    mask: u64,
+    hw: u32,
+    channels: u32,
+    inv_weight_sum: f32,
+    lambda: f32,
+    has_mask: u32,
+    pad: u32,
+}
+
+struct Scratch {
+    width: u32,
+    height: u32,
+    a: Buffer,
+    b: Buffer,
+    ssim_map: Buffer,
+    l1_map: Buffer,
+    dl_drgb: Buffer,
+}
+
+/// Where the image, target and mask live; offsets let one buffer hold all of a dataset's targets.
+pub struct LossInputs<'a> {
+    /// Planar RGB render, width * height per plane.
+    pub render: &'a Buffer,
+    /// Planar RGB target at `target_offset` (in floats).
+    pub target: &'a Buffer,
+    pub target_offset: u64,
+    /// Optional width * height mask (1 = counts) and its sum.
+    pub mask: Option<(&'a Buffer, u64, f64)>,
+}
+
+pub struct PhotometricLoss {
+    gpu: Gpu,
+    blur: ComputePipeline,
+    products: ComputePipeline,
+    terms: ComputePipeline,
+    grad: ComputePipeline,
+    scratch: Option<Scratch>,
+    pub lambda: f32,
+}
+
+impl PhotometricLoss {
+    pub fn new(gpu: &Gpu) -> Result<PhotometricLoss> {
+        Ok(PhotometricLoss {
+            gpu: gpu.clone(),
+            blur: ComputePipeline::new(gpu, "blur", shaders::BLUR)?,
+            products: ComputePipeline::new(gpu, "ssim_products", shaders::SSIM_PRODUCTS)?,
+            terms: ComputePipeline::new(gpu, "ssim_terms", shaders::SSIM_TERMS)?,
+            grad: ComputePipeline::new(gpu, "loss_grad", shaders::LOSS_GRAD)?,
+            scratch: None,
+            lambda: SSIM_LAMBDA,
+        })
+    }
+
+    fn reserve(&mut self, width: u32, height: u32) -> Result<()> {
+        if self.scratch.as_ref().is_some_and(|s| s.width == width && s.height == height) {
+            return Ok(());
+        }
+        let n = (width * height * CHANNELS) as u64;
+        let g = &self.gpu;
+        self.scratch = Some(Scratch {
+            width,
+            height,
+            a: Buffer::new(g, "ssim scratch a", 5 * n * 4, MemoryKind::Device)?,
+            b: Buffer::new(g, "ssim scratch b", 5 * n * 4, MemoryKind::Device)?,
+            ssim_map: Buffer::new(g, "ssim map", n * 4, MemoryKind::Device)?,
+            l1_map: Buffer::new(g, "l1 map", n * 4, MemoryKind::Device)?,
+            dl_drgb: Buffer::new(g, "dl/drgb", n * 4, MemoryKind::Device)?,
+        });
+        Ok(())
+    }
+
+    /// Records the loss gradient into `dl_drgb()` and the weighted per-pixel SSIM and L1 maps.
+    pub fn record(&mut self, rec: &mut Recorder, width: u32, height: u32, inputs: &LossInputs) -> Result<()> {
+        self.reserve(width, height)?;
+        let s = self.scratch.as_ref().unwrap();
+        let hw = width * height;
+        let n = hw * CHANNELS;
+        let groups = dispatch_1d(n.div_ceil(256));
+        let target = inputs.target.address() + inputs.target_offset * 4;
+        let (mask, has_mask, weight_sum) = match inputs.mask {
+            Some((b, offset, sum)) => (b.address() + offset * 4, 1, sum * CHANNELS as f64),
+            None => (0, 0, n as f64),
+        };
+        let inv = (1.0 / weight_sum.max(1.0)) as f32;
+        rec.dispatch(
+            &self.products,
+            &ProductsPush { render: inputs.render.address(), target, products: s.a.address(), hw, channels: CHANNELS },
+            groups,
+        );
+        self.record_blur(rec, &s.a, &s.b, width, height, 5 * CHANNELS);
+        rec.dispatch(
+            &self.terms,
+            &TermsPush {
+                stats: s.a.address(),
+                terms: s.b.address(),
+                ssim_map: s.ssim_map.address(),
+                mask,
+                hw,
+                channels: CHANNELS,
+                inv_weight_sum: inv,
+                has_mask,
+            },
+            groups,
+        );
+        self.record_blur(rec, &s.b, &s.a, width, height, 3 * CHANNELS);
+        rec.dispatch(
+            &self.grad,
+            &GradPush {
+                render: inputs.render.address(),
+                target,
+                blurred_terms: s.b.address(),
+                dl_dx: s.dl_drgb.address(),
+                l1_map: s.l1_map.address(),
+                mask,
+                hw,
+                channels: CHANNELS,
+                inv_weight_sum: inv,
+                lambda: self.lambda,
+                has_mask,
+                pad: 0,
+            },
+            groups,
+        );
+        rec.mark("loss");
+        Ok(())
+    }
+
+    /// Separable blur of `planes` planes; the result ends in `src` again (src -> tmp -> src).
+    fn record_blur(&self, rec: &mut Recorder, src: &Buffer, tmp: &Buffer, width: u32, height: u32, planes: u32) {
+        let groups = dispatch_1d((width * height * planes).div_ceil(256));
+        rec.dispatch(
+            &self.blur,
+            &BlurPush { src: src.address(), dst: tmp.address(), width, height, planes, vertical: 0 },
+            groups,
+        );
+        rec.dispatch(
+            &self.blur,
+            &BlurPush { src: tmp.address(), dst: src.address(), width, height, planes, vertical: 1 },
+            groups,
+        );
+    }
+
+    /// dL/d(render), planar RGB, after `record` ran.
+    pub fn dl_drgb(&self) -> &Buffer {
+        &self.scratch.as_ref().unwrap().dl_drgb
+    }
+
+    /// Reads back (loss, L1, SSIM) of the last recorded evaluation.
+    pub fn read_values(&self) -> Result<(f64, f64, f64)> {
+        let s = self.scratch.as_ref().unwrap();
+        let n = (s.width * s.height * CHANNELS) as usize;
+        let ssim: f64 = s.ssim_map.download::<f32>(&self.gpu, n)?.iter().map(|&v| v as f64).sum();
+        let l1: f64 = s.l1_map.download::<f32>(&self.gpu, n)?.iter().map(|&v| v as f64).sum();
+        let lambda = self.lambda as f64;
+        Ok(((1.0 - lambda) * l1 + lambda * (1.0 - ssim), l1, ssim))
+    }
+}
+
+/// f64 CPU twins of the loss, for tests.
+pub mod reference {
+    fn window() -> [f64; 11] {
+        let mut w = [0.0; 11];
+        for (i, v) in w.iter_mut().enumerate() {
+            let k = i as f64 - 5.0;
+            *v = (-k * k / (2.0 * 1.5 * 1.5)).exp();
+        }
+        let s: f64 = w.iter().sum();
+        w.map(|v| v / s)
+    }
+
+    fn blur(img: &[f64], width: usize, height: usize) -> Vec<f64> {
+        let w = window();
+        let mut tmp = vec![0.0; img.len()];
+        let mut out = vec![0.0; img.len()];
+        for y in 0..height {
+            for x in 0..width {
+                tmp[y * width + x] = (-5i64..=5)
+                    .filter_map(|k| {
+                        let xx = x as i64 + k;
+                        (0..width as i64).contains(&xx).then(|| w[(k + 5) as usize] * img[y * width + xx as usize])
+                    })
+                    .sum();
+            }
+        }
+        for y in 0..height {
+            for x in 0..width {
+                out[y * width + x] = (-5i64..=5)
+                    .filter_map(|k| {
+                        let yy = y as i64 + k;
+                        (0..height as i64).contains(&yy).then(|| w[(k + 5) as usize] * tmp[yy as usize * width + x])
+                    })
+                    .sum();
+            }
+        }
+        out
+    }
+
+    /// Mean SSIM over pixels and channels (planar channels), optionally weighted by a mask.
+    pub fn ssim(x: &[f64], y: &[f64], width: usize, height: usize, mask: Option<&[f64]>) -> f64 {
+        let hw = width * height;
+        let channels = x.len() / hw;
+        let (c1, c2) = (0.01f64.powi(2), 0.03f64.powi(2));
+        let mut total = 0.0;
+        let mut weight = 0.0;
+        for c in 0..channels {
+            let xs = &x[c * hw..(c + 1) * hw];
+            let ys = &y[c * hw..(c + 1) * hw];
+            let sq = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(p, q)| p * q).collect::<Vec<_>>();
+            let (mx, my) = (blur(xs, width, height), blur(ys, width, height));
+            let (exx, eyy, exy) =
+                (blur(&sq(xs, xs), width, height), blur(&sq(ys, ys), width, height), blur(&sq(xs, ys), width, height));
+            for i in 0..hw {
+                let sxx = exx[i] - mx[i] * mx[i];
+                let syy = eyy[i] - my[i] * my[i];
+                let sxy = exy[i] - mx[i] * my[i];
+                let s = (2.0 * mx[i] * my[i] + c1) * (2.0 * sxy + c2)
+                    / ((mx[i] * mx[i] + my[i] * my[i] + c1) * (sxx + syy + c2));
+                let m = mask.map_or(1.0, |m| m[i]);
+                total += m * s;
+                weight += m;
+            }
+        }
+        total / weight
+    }
+
+    /// Mean absolute difference, optionally mask-weighted.
+    pub fn l1(x: &[f64], y: &[f64], width: usize, height: usize, mask: Option<&[f64]>) -> f64 {
+        let hw = width * height;
+        let (mut total, mut weight) = (0.0, 0.0);
+        for (i, (a, b)) in x.iter().zip(y).enumerate() {
+            let m = mask.map_or(1.0, |m| m[i % hw]);
+            total += m * (a - b).abs();
+            weight += m;
+        }
+        total / weight
+    }
+
+    /// (1 - lambda) L1 + lambda (1 - SSIM).
+    pub fn loss(x: &[f64], y: &[f64], width: usize, height: usize, mask: Option<&[f64]>, lambda: f64) -> f64 {
+        (1.0 - lambda) * l1(x, y, width, height, mask) + lambda * (1.0 - ssim(x, y, width, height, mask))
+    }
+}

@@ -1,0 +1,128 @@
+//! The GPU photometric loss (L1 + SSIM) and Adam against f64 CPU implementations.
+
+mod common;
+
+use cogeo::demo::Rng;
+use cogeo::gpu::{Buffer, Recorder};
+use cogeo::train::adam::{Adam, Moments, BETA1, BETA2, EPS};
+use cogeo::train::loss::{reference, LossInputs, PhotometricLoss};
+use common::gpu;
+
+fn image(rng: &mut Rng, n: usize) -> Vec<f32> {
+    (0..n).map(|_| rng.uniform() as f32).collect()
+}
+
+/// GPU loss value and gradient against the CPU reference and its central finite differences.
+fn check_loss(width: usize, height: usize, masked: bool, seed: u64) {
+    let g = gpu();
+    let mut rng = Rng::new(seed);
+    let hw = width * height;
+    // a smooth-ish target plus noise, and a render near it, so SSIM is far from trivial
+    let target: Vec<f32> = (0..3 * hw)
+        .map(|i| {
+            let p = i % hw;
+            (0.5 + 0.3 * ((p % width) as f64 * 0.4).sin() * ((p / width) as f64 * 0.3).cos() + 0.1 * rng.normal())
+                as f32
+        })
+        .collect();
+    let render: Vec<f32> = target.iter().map(|&t| t + (0.15 * rng.normal()) as f32).collect();
+    let mask: Vec<f32> = (0..hw).map(|p| if masked && (p % width) < width / 3 { 0.0 } else { 1.0 }).collect();
+    let mask_sum: f64 = mask.iter().map(|&v| v as f64).sum();
+
+    let render_buf = Buffer::from_slice(&g, "render", &render).unwrap();
+    // the target sits at an offset inside a larger buffer, as a dataset's images do
+    let mut targets = image(&mut rng, 3 * hw);
+    targets.extend(&target);
+    let target_buf = Buffer::from_slice(&g, "targets", &targets).unwrap();
+    let mask_buf = Buffer::from_slice(&g, "mask", &mask).unwrap();
+    let mut loss = PhotometricLoss::new(&g).unwrap();
+    let mut rec = Recorder::new(&g).unwrap();
+    let inputs = LossInputs {
+        render: &render_buf,
+        target: &target_buf,
+        target_offset: (3 * hw) as u64,
+        mask: masked.then_some((&mask_buf, 0, mask_sum)),
+    };
+    loss.record(&mut rec, width as u32, height as u32, &inputs).unwrap();
+    rec.submit_and_wait().unwrap();
+    let (value, l1, ssim) = loss.read_values().unwrap();
+    let grad: Vec<f32> = loss.dl_drgb().download(&g, 3 * hw).unwrap();
+
+    let x: Vec<f64> = render.iter().map(|&v| v as f64).collect();
+    let y: Vec<f64> = target.iter().map(|&v| v as f64).collect();
+    let m: Vec<f64> = mask.iter().map(|&v| v as f64).collect();
+    let mref = masked.then_some(m.as_slice());
+    let ref_ssim = reference::ssim(&x, &y, width, height, mref);
+    let ref_l1 = reference::l1(&x, &y, width, height, mref);
+    let ref_loss = reference::loss(&x, &y, width, height, mref, 0.2);
+    println!("{width}x{height} masked={masked}: SSIM gpu {ssim:.7} cpu {ref_ssim:.7}; L1 gpu {l1:.7} cpu {ref_l1:.7}");
+    assert!(ref_ssim > 0.2 && ref_ssim < 0.9, "SSIM {ref_ssim} should be far from 0 and 1");
+    assert!((ssim - ref_ssim).abs() < 1e-5);
+    assert!((l1 - ref_l1).abs() < 1e-6);
+    assert!((value - ref_loss).abs() < 1e-5);
+
+    let mut max_err: f64 = 0.0;
+    let mut max_g: f64 = 0.0;
+    for i in 0..3 * hw {
+        let h = 1e-5;
+        let mut xp = x.clone();
+        xp[i] += h;
+        let mut xm = x.clone();
+        xm[i] -= h;
+        let fd = (reference::loss(&xp, &y, width, height, mref, 0.2)
+            - reference::loss(&xm, &y, width, height, mref, 0.2))
+            / (2.0 * h);
+        max_err = max_err.max((grad[i] as f64 - fd).abs());
+        max_g = max_g.max(fd.abs());
+        if masked && mask[i % hw] == 0.0 {
+            // masked-out pixels still shape SSIM windows of counted pixels next to them, but have no L1 term
+            assert!(fd.abs() < 0.2 / mask_sum || (i % hw) % width >= width / 3 - 6);
+        }
+    }
+    println!("  gradient: max |fd| {max_g:.3e}, max error {max_err:.3e}");
+    assert!(max_err <= 1e-3 * max_g, "loss gradient error {max_err:.3e} vs scale {max_g:.3e}");
+}
+
+#[test]
+fn loss_value_and_gradient_match_cpu() {
+    check_loss(23, 19, false, 1);
+    check_loss(30, 17, true, 2);
+}
+
+#[test]
+fn adam_matches_cpu_for_several_steps() {
+    let g = gpu();
+    let mut rng = Rng::new(5);
+    let n = 1000;
+    let mut p: Vec<f32> = image(&mut rng, n);
+    let p_buf = Buffer::from_slice(&g, "p", &p).unwrap();
+    let moments = Moments::new(&g, "p", n as u32).unwrap();
+    let adam = Adam::new(&g).unwrap();
+    let (mut m, mut v) = (vec![0f64; n], vec![0f64; n]);
+    let mut pd: Vec<f64> = p.iter().map(|&x| x as f64).collect();
+    for step in 1..=5u32 {
+        let grad: Vec<f32> = (0..n).map(|_| (rng.normal() * 0.1) as f32).collect();
+        let g_buf = Buffer::from_slice(&g, "g", &grad).unwrap();
+        let lr = 0.01 * step as f32;
+        let mut rec = Recorder::new(&g).unwrap();
+        adam.record(&mut rec, &p_buf, &g_buf, &moments, lr, step);
+        rec.submit_and_wait().unwrap();
+        let (b1, b2) = (BETA1 as f64, BETA2 as f64);
+        for i in 0..n {
+            let gi = grad[i] as f64;
+            m[i] = b1 * m[i] + (1.0 - b1) * gi;
+            v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
+            let mh = m[i] / (1.0 - b1.powi(step as i32));
+            let vh = v[i] / (1.0 - b2.powi(step as i32));
+            pd[i] -= lr as f64 * mh / (vh.sqrt() + EPS as f64);
+        }
+    }
+    p = p_buf.download(&g, n).unwrap();
+    let err = p.iter().zip(&pd).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+    println!("adam max error after 5 steps: {err:.3e}");
+    assert!(err < 1e-5, "adam error {err}");
+    // Adam's steps move parameters by about lr each: the comparison above is not between two no-ops
+    let moved: f64 =
+        p.iter().zip(image(&mut Rng::new(5), n)).map(|(a, b)| (a - b).abs() as f64).sum::<f64>() / n as f64;
+    assert!(moved > 0.01, "mean movement {moved}");
+}
