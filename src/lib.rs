@@ -8,6 +8,7 @@ pub mod gpu;
 pub mod io;
 pub mod render;
 pub mod scene;
+pub mod synth;
 pub mod train;
 
 /// SPIR-V of every `shaders/glsl/*.comp`, compiled by build.rs.
