@@ -38,6 +38,8 @@ enum Command {
     Demo(DemoArgs),
     /// Generate a procedural dataset with exact ground truth for training and removal.
     Synth(SynthArgs),
+    /// Train a Gaussian scene from a COLMAP capture (sparse model + images).
+    Train(TrainArgs),
 }
 
 #[derive(Args)]
@@ -104,6 +106,48 @@ struct DemoArgs {
 }
 
 #[derive(Args)]
+struct TrainArgs {
+    /// Dataset folder: COLMAP model (here or in sparse/0) and an image folder.
+    #[arg(long)]
+    data: PathBuf,
+    /// Output folder: scene.ply, metrics.json and checkpoint/ (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Image folder inside --data (e.g. images_2, images_4 for downscaled copies; intrinsics are scaled).
+    #[arg(long, default_value = "images")]
+    images: String,
+    /// Training iterations.
+    #[arg(long, default_value_t = 30_000)]
+    iters: u32,
+    /// Continue from the last checkpoint in --out (starts fresh when there is none).
+    #[arg(long)]
+    resume: bool,
+    /// Write a checkpoint every this many iterations (0 = only at the end).
+    #[arg(long, default_value_t = 1000)]
+    checkpoint_every: u32,
+    /// Highest SH degree (one more band every 1000 iterations).
+    #[arg(long, default_value_t = 3)]
+    sh_degree: u32,
+    /// Disable adaptive density control (clone / split / prune / opacity reset).
+    #[arg(long)]
+    no_densify: bool,
+    /// Upper bound on the number of Gaussians densification may create.
+    #[arg(long, default_value_t = 3_000_000)]
+    max_gaussians: usize,
+    /// Densify until this iteration (INRIA: 15000; scaled down automatically for short runs).
+    #[arg(long)]
+    densify_until: Option<u32>,
+    /// Background color r,g,b in [0, 1] behind the Gaussians.
+    #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
+    background: [f32; 3],
+    /// Random seed (view order, splits).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+#[derive(Args)]
 struct SynthArgs {
     /// Output folder (created; must be empty): COLMAP text model in sparse/0, images/, object_mask/,
     /// gt_background/, depth/, depth_background/ (EXR), unseen_mask/, synth.json.
@@ -127,6 +171,9 @@ struct SynthArgs {
     /// Random seed (object placement, textures, point noise).
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Sparse points sampled from each training view (default: pixels / 12).
+    #[arg(long)]
+    points_per_view: Option<usize>,
 }
 
 fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
@@ -292,11 +339,116 @@ fn cmd_synth(a: SynthArgs) -> Result<()> {
         objects: a.objects,
         rig: a.rig,
         seed: a.seed,
+        points_per_view: a.points_per_view.unwrap_or((a.width * a.height / 12) as usize),
     };
     let bar = progress(2 * a.views, "synth");
     let objects = cogeo::synth::generate(&cfg, &a.out, &|done, _| bar.set_position(done as u64))?;
     bar.finish();
     eprintln!("wrote {} views with {} objects to {}", a.views, objects.len(), a.out.display());
+    Ok(())
+}
+
+fn cmd_train(a: TrainArgs) -> Result<()> {
+    use cogeo::train::{checkpoint, dataset, trainer};
+    if a.iters == 0 {
+        bail!("--iters must be positive");
+    }
+    if a.sh_degree > 3 {
+        bail!("--sh-degree must be 0..3");
+    }
+    let data = dataset::load(&a.data, &a.images)?;
+    for w in &data.warnings {
+        eprintln!("warning: {w}");
+    }
+    let gpu = open_gpu(&a.device)?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    let densify_until = a.densify_until.unwrap_or_else(|| (a.iters / 2).min(15_000));
+    let cfg = trainer::TrainConfig {
+        iters: a.iters,
+        sh_degree: a.sh_degree,
+        densify: !a.no_densify,
+        densify_from: 500.min(a.iters / 10),
+        densify_until,
+        // INRIA's fixed interval: short runs end densification before any reset, which suits them
+        // (a reset needs thousands of iterations to recover)
+        opacity_reset_interval: 3000,
+        max_gaussians: a.max_gaussians,
+        seed: a.seed,
+        background: a.background,
+        ..Default::default()
+    };
+    let resumed = if a.resume { checkpoint::load(&a.out)? } else { None };
+    if a.resume && resumed.is_none() {
+        eprintln!("no checkpoint in {}; starting from the sparse points", a.out.display());
+    }
+    let scene = match &resumed {
+        Some(c) => c.scene.clone(),
+        None => trainer::init_from_points(&data.points, a.sh_degree)?,
+    };
+    let mut t = trainer::Trainer::new(&gpu, &data, &scene, cfg)?;
+    if let Some(c) = &resumed {
+        t.set_step(c.step);
+        t.load_moments(&c.moments)?;
+        eprintln!("resumed at iteration {} with {} Gaussians", c.step, scene.len());
+    }
+    eprintln!(
+        "training {} views ({} held out), {} Gaussians, extent {:.2}, on {}",
+        data.train.len(),
+        data.test.len(),
+        t.num_gaussians(),
+        data.extent,
+        gpu.info().name
+    );
+    let bar = ProgressBar::new(a.iters as u64);
+    bar.set_style(ProgressStyle::with_template("train [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {msg}").unwrap().progress_chars("=> "));
+    bar.set_position(t.step as u64);
+    let start = std::time::Instant::now();
+    let first_step = t.step;
+    let mut test_psnr = None;
+    while t.step < a.iters {
+        let log = (t.step + 1) % 50 == 0;
+        t.iterate(&data, log)?;
+        if a.checkpoint_every > 0 && t.step % a.checkpoint_every == 0 && t.step < a.iters {
+            checkpoint::save(&t, &a.out)?;
+            test_psnr = Some(t.evaluate(&data.test)?.psnr);
+        }
+        if let Some((loss, l1)) = t.last_loss.filter(|_| log) {
+            let psnr = test_psnr.map(|p| format!(" test PSNR {p:.2}")).unwrap_or_default();
+            bar.set_message(format!("loss {loss:.4} L1 {l1:.4}{psnr} | {} Gaussians", t.num_gaussians()));
+        }
+        bar.set_position(t.step as u64);
+    }
+    bar.finish();
+    let seconds = start.elapsed().as_secs_f64();
+    let scene = t.download_scene()?;
+    ply::write_ply(&scene, &a.out.join("scene.ply"))?;
+    checkpoint::save(&t, &a.out)?;
+    let test = t.evaluate(&data.test)?;
+    let train = t.evaluate(&data.train)?;
+    let report = serde_json::json!({
+        "iterations": t.step,
+        "gaussians": scene.len(),
+        "seconds": seconds,
+        "iterations_per_second": (t.step - first_step) as f64 / seconds.max(1e-9),
+        "test": test,
+        "train": train,
+        "device": gpu.info().name,
+    });
+    let text = serde_json::to_string_pretty(&report)?;
+    cogeo::io::write_atomic(&a.out.join("metrics.json"), |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(Into::into)
+    })?;
+    eprintln!(
+        "done: {} Gaussians; test PSNR {:.2} dB SSIM {:.4} ({} views); train PSNR {:.2}; {:.1} it/s; wrote {}",
+        scene.len(),
+        test.psnr,
+        test.ssim,
+        test.views,
+        train.psnr,
+        (t.step - first_step) as f64 / seconds.max(1e-9),
+        a.out.join("scene.ply").display()
+    );
     Ok(())
 }
 
@@ -314,6 +466,7 @@ fn main() {
         Command::Render(a) => cmd_render(a),
         Command::Demo(a) => cmd_demo(a),
         Command::Synth(a) => cmd_synth(a),
+        Command::Train(a) => cmd_train(a),
     };
     if let Err(e) = result {
         // one line: the error and its causes

@@ -66,6 +66,8 @@ pub struct SynthConfig {
     pub objects: usize,
     pub rig: Rig,
     pub seed: u64,
+    /// Sparse points sampled from each training view for the COLMAP model.
+    pub points_per_view: usize,
 }
 
 const ROOM_RADIUS: f64 = 6.0;
@@ -504,7 +506,7 @@ fn write_colmap(
     let mut points = String::from("# 3D point list: POINT3D_ID X Y Z R G B ERROR TRACK[]\n");
     let mut id = 1;
     for &t in train {
-        for _ in 0..(hw / 12).max(16) {
+        for _ in 0..cfg.points_per_view.max(4) {
             let p = (rng.next_u64() % hw as u64) as usize;
             let pt = renders[t].points[p];
             let noise = 0.01;

@@ -23,7 +23,9 @@ struct AdamPush {
     eps: f32,
     bias1: f32,
     bias2: f32,
-    pad: u32,
+    period: u32,
+    head: u32,
+    lr_tail: f32,
 }
 
 /// First and second moments of one tensor.
@@ -56,6 +58,12 @@ impl Adam {
 
     /// Records one step (`step` counts from 1) of `param -= ...` with gradient `grad`.
     pub fn record(&self, rec: &mut Recorder, param: &Buffer, grad: &Buffer, moments: &Moments, lr: f32, step: u32) {
+        self.record_split(rec, param, grad, moments, (lr, 1, 1, lr), step);
+    }
+
+    /// As `record`, with two rates: element i uses `rates.0` when i % rates.1 < rates.2, else `rates.3`.
+    pub fn record_split(&self, rec: &mut Recorder, param: &Buffer, grad: &Buffer, moments: &Moments, rates: (f32, u32, u32, f32), step: u32) {
+        let (lr, period, head, lr_tail) = rates;
         let push = AdamPush {
             param: param.address(),
             grad: grad.address(),
@@ -68,7 +76,9 @@ impl Adam {
             eps: EPS,
             bias1: 1.0 - BETA1.powi(step as i32),
             bias2: 1.0 - BETA2.powi(step as i32),
-            pad: 0,
+            period,
+            head,
+            lr_tail,
         };
         rec.dispatch(&self.pipeline, &push, dispatch_1d(moments.len.div_ceil(256)));
     }

@@ -1,4 +1,7 @@
 //! Training: the photometric loss, Adam, datasets and the training loop.
 
 pub mod adam;
+pub mod checkpoint;
+pub mod dataset;
 pub mod loss;
+pub mod trainer;

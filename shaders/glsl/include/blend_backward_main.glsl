@@ -22,6 +22,7 @@ shared vec2 s_xy[BATCH];
 shared vec4 s_conic_opacity[BATCH];
 shared vec4 s_color_depth[BATCH];
 shared uint s_gauss[BATCH];
+shared uint s_last;  // largest n_contrib of the tile: nothing after it contributed anywhere
 
 void main() {
     uint tile = tile_id();
@@ -52,6 +53,12 @@ void main() {
             dl_dw = -dl_ded * d_total / (w_total * w_total);
         }
     }
+
+    if (local == 0) s_last = 0;
+    barrier();
+    atomicMax(s_last, last);
+    barrier();
+    end = min(end, max(s_last, start));
 
     float T = t_final;
     vec3 behind_color = t_final * bg;

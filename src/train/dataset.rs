@@ -1,0 +1,92 @@
+//! Training data: a COLMAP model plus an image folder (`images`, or a Mip-NeRF 360 style `images_2`,
+//! `images_4`, ... holding downscaled copies: intrinsics are scaled to the actual image size), with
+//! the Mip-NeRF 360 split (every 8th view, 0, 8, 16, ..., held out for testing).
+
+use crate::scene::colmap::{read_colmap, Point3D};
+use crate::scene::Camera;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+
+pub struct View {
+    pub camera: Camera,
+    /// Planar RGB in [0, 1], width * height per plane.
+    pub image: Vec<f32>,
+    pub path: PathBuf,
+}
+
+pub struct Dataset {
+    pub train: Vec<View>,
+    pub test: Vec<View>,
+    pub points: Vec<Point3D>,
+    /// Radius of the camera centers around their mean, times 1.1 (INRIA's scene extent).
+    pub extent: f64,
+    pub warnings: Vec<String>,
+}
+
+const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "PNG", "JPG"];
+
+/// Finds `stem.<ext>` in `dir`.
+pub fn find_image(dir: &Path, stem: &str) -> Option<PathBuf> {
+    IMAGE_EXTENSIONS.iter().map(|e| dir.join(format!("{stem}.{e}"))).find(|p| p.exists())
+}
+
+/// Loads an image as planar RGB floats in [0, 1].
+pub fn load_rgb(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
+    let img = image::open(path).with_context(|| format!("{}: cannot read image", path.display()))?.to_rgb8();
+    let (w, h) = img.dimensions();
+    let hw = (w * h) as usize;
+    let mut out = vec![0f32; 3 * hw];
+    for (i, p) in img.pixels().enumerate() {
+        for c in 0..3 {
+            out[c * hw + i] = p[c] as f32 / 255.0;
+        }
+    }
+    Ok((w, h, out))
+}
+
+/// Is view `index` (in name order) a held-out test view?
+pub fn is_test_view(index: usize) -> bool {
+    index % 8 == 0
+}
+
+/// Loads `dir` (COLMAP model in `dir` or `dir/sparse/0`) with images from `dir/<images>`.
+pub fn load(dir: &Path, images: &str) -> Result<Dataset> {
+    let model = read_colmap(dir)?;
+    let image_dir = dir.join(images);
+    if !image_dir.is_dir() {
+        bail!("{}: image folder not found", image_dir.display());
+    }
+    let mut train = Vec::new();
+    let mut test = Vec::new();
+    for (i, cam) in model.cameras.iter().enumerate() {
+        let path = find_image(&image_dir, &cam.name)
+            .with_context(|| format!("{}: no image named {}.png/.jpg for a COLMAP view", image_dir.display(), cam.name))?;
+        let (w, h, rgb) = load_rgb(&path)?;
+        // downscaled folders: scale the intrinsics to the image actually loaded
+        let camera = if (w, h) != (cam.width, cam.height) {
+            let (sx, sy) = (w as f64 / cam.width as f64, h as f64 / cam.height as f64);
+            if (sx / sy - 1.0).abs() > 0.02 {
+                bail!("{}: {w}x{h} does not match the aspect of the COLMAP camera {}x{}", path.display(), cam.width, cam.height);
+            }
+            cam.resized(w, h)
+        } else {
+            cam.clone()
+        };
+        let view = View { camera, image: rgb, path };
+        if is_test_view(i) {
+            test.push(view);
+        } else {
+            train.push(view);
+        }
+    }
+    if train.is_empty() {
+        bail!("{}: no training views", dir.display());
+    }
+    let centers: Vec<[f64; 3]> = train.iter().chain(&test).map(|v| v.camera.center()).collect();
+    let mean = (0..3).map(|a| centers.iter().map(|c| c[a]).sum::<f64>() / centers.len() as f64).collect::<Vec<_>>();
+    let radius = centers
+        .iter()
+        .map(|c| ((c[0] - mean[0]).powi(2) + (c[1] - mean[1]).powi(2) + (c[2] - mean[2]).powi(2)).sqrt())
+        .fold(0.0, f64::max);
+    Ok(Dataset { train, test, points: model.points, extent: (radius * 1.1).max(1e-3), warnings: model.warnings })
+}

@@ -1,0 +1,438 @@
+//! The training loop: per iteration one training view is rendered (forward passes), the photometric
+//! loss and its gradient are computed, the backward passes accumulate parameter gradients and Adam
+//! updates every parameter group with its INRIA learning rate (conventions.md). SH degree grows by one
+//! every 1000 iterations. Densification (clone / split / prune, opacity reset) runs on the host every
+//! 100 iterations, carrying the Adam moments of surviving Gaussians.
+
+use super::adam::{Adam, Moments};
+use super::dataset::{Dataset, View};
+use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
+use crate::demo::Rng;
+use crate::gpu::{Buffer, Gpu, Recorder};
+use crate::render::backward::{Backward, PixelGradients, SceneGradients};
+use crate::render::reference::{quat_to_matrix, SH_C0};
+use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
+use crate::scene::colmap::Point3D;
+use crate::scene::{sh_coeffs, GaussianScene};
+use anyhow::{bail, Result};
+
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct TrainConfig {
+    pub iters: u32,
+    /// Highest SH degree (reached after 1000 * degree iterations).
+    pub sh_degree: u32,
+    pub densify: bool,
+    pub densify_from: u32,
+    pub densify_until: u32,
+    pub densify_interval: u32,
+    /// Mean view-space positional gradient (NDC units) above which Gaussians are cloned or split.
+    pub grad_threshold: f32,
+    pub opacity_reset_interval: u32,
+    /// Densification never grows the scene past this many Gaussians.
+    pub max_gaussians: usize,
+    pub seed: u64,
+    pub background: [f32; 3],
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        TrainConfig {
+            iters: 30_000,
+            sh_degree: 3,
+            densify: true,
+            densify_from: 500,
+            densify_until: 15_000,
+            densify_interval: 100,
+            grad_threshold: 2e-4,
+            opacity_reset_interval: 3000,
+            max_gaussians: 3_000_000,
+            seed: 0,
+            background: [0.0; 3],
+        }
+    }
+}
+
+/// Learning rates (conventions.md, INRIA defaults).
+pub const LR_POSITION_INIT: f64 = 1.6e-4;
+pub const LR_POSITION_FINAL: f64 = 1.6e-6;
+pub const LR_SH_DC: f32 = 2.5e-3;
+pub const LR_SH_REST: f32 = 2.5e-3 / 20.0;
+pub const LR_OPACITY: f32 = 0.025;
+pub const LR_SCALE: f32 = 5e-3;
+pub const LR_ROTATION: f32 = 1e-3;
+
+fn logit(p: f64) -> f32 {
+    (p / (1.0 - p)).ln() as f32
+}
+
+/// INRIA initialization from sparse points: color from the point, isotropic scale from the mean
+/// squared distance to the 3 nearest neighbours, identity rotation, opacity 0.1.
+pub fn init_from_points(points: &[Point3D], sh_degree: u32) -> Result<GaussianScene> {
+    if points.len() < 4 {
+        bail!("need at least 4 sparse points to initialize, got {}", points.len());
+    }
+    use kiddo::{KdTree, SquaredEuclidean};
+    let mut tree: KdTree<f64, 3> = KdTree::new();
+    for (i, p) in points.iter().enumerate() {
+        tree.add(&p.xyz, i as u64);
+    }
+    let k = sh_coeffs(sh_degree);
+    let mut scene = GaussianScene { sh_degree, ..Default::default() };
+    for p in points {
+        let nearest = tree.nearest_n::<SquaredEuclidean>(&p.xyz, 4);
+        let d2: f64 = nearest.iter().skip(1).map(|n| n.distance).sum::<f64>() / 3.0;
+        let s = d2.max(1e-7).sqrt().ln() as f32;
+        scene.means.push(p.xyz.map(|v| v as f32));
+        scene.normals.push([0.0; 3]);
+        scene.log_scales.push([s; 3]);
+        scene.quats.push([1.0, 0.0, 0.0, 0.0]);
+        scene.opacity_logits.push(logit(0.1));
+        for b in 0..k {
+            for c in 0..3 {
+                scene.sh.push(if b == 0 { ((p.rgb[c] as f64 / 255.0 - 0.5) / SH_C0) as f32 } else { 0.0 });
+            }
+        }
+    }
+    Ok(scene)
+}
+
+/// Adam state of the five parameter groups.
+struct GroupMoments {
+    means: Moments,
+    log_scales: Moments,
+    quats: Moments,
+    opacity_logits: Moments,
+    sh: Moments,
+}
+
+impl GroupMoments {
+    fn new(gpu: &Gpu, n: u32, k: u32) -> Result<GroupMoments> {
+        Ok(GroupMoments {
+            means: Moments::new(gpu, "means", 3 * n)?,
+            log_scales: Moments::new(gpu, "log_scales", 3 * n)?,
+            quats: Moments::new(gpu, "quats", 4 * n)?,
+            opacity_logits: Moments::new(gpu, "opacity", n)?,
+            sh: Moments::new(gpu, "sh", 3 * k * n)?,
+        })
+    }
+}
+
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Metrics {
+    pub psnr: f64,
+    pub ssim: f64,
+    pub views: usize,
+}
+
+pub struct Trainer {
+    gpu: Gpu,
+    pub cfg: TrainConfig,
+    extent: f64,
+    scene: SceneBuffers,
+    grads: SceneGradients,
+    moments: GroupMoments,
+    raster: Rasterizer,
+    backward: Backward,
+    loss: PhotometricLoss,
+    adam: Adam,
+    /// Every training image, planar RGB, one after another.
+    targets: Buffer,
+    target_offsets: Vec<u64>,
+    pub step: u32,
+    rng: Rng,
+    order: Vec<usize>,
+    /// (loss, L1) of the last iteration whose values were read.
+    pub last_loss: Option<(f64, f64)>,
+    /// Record GPU timestamps per pass (see `last_timings`).
+    pub profile: bool,
+    pub last_timings: Vec<crate::gpu::PassTiming>,
+}
+
+impl Trainer {
+    pub fn new(gpu: &Gpu, dataset: &Dataset, scene: &GaussianScene, cfg: TrainConfig) -> Result<Trainer> {
+        scene.validate("initial scene")?;
+        let mut all = Vec::new();
+        let mut target_offsets = Vec::new();
+        for v in &dataset.train {
+            target_offsets.push(all.len() as u64);
+            all.extend_from_slice(&v.image);
+        }
+        let buffers = SceneBuffers::upload(gpu, scene, None)?;
+        let grads = SceneGradients::new(gpu, &buffers)?;
+        let k = sh_coeffs(scene.sh_degree) as u32;
+        Ok(Trainer {
+            gpu: gpu.clone(),
+            extent: dataset.extent,
+            moments: GroupMoments::new(gpu, buffers.num_gaussians, k)?,
+            scene: buffers,
+            grads,
+            raster: Rasterizer::new(gpu)?,
+            backward: Backward::new(gpu, false)?,
+            loss: PhotometricLoss::new(gpu)?,
+            adam: Adam::new(gpu)?,
+            targets: Buffer::from_slice(gpu, "training images", &all)?,
+            target_offsets,
+            step: 0,
+            rng: Rng::new(cfg.seed),
+            order: Vec::new(),
+            cfg,
+            last_loss: None,
+            profile: false,
+            last_timings: Vec::new(),
+        })
+    }
+
+    pub fn num_gaussians(&self) -> u32 {
+        self.scene.num_gaussians
+    }
+
+    fn position_lr(&self) -> f32 {
+        let t = (self.step as f64 / self.cfg.iters.max(1) as f64).min(1.0);
+        ((LR_POSITION_INIT.ln() * (1.0 - t) + LR_POSITION_FINAL.ln() * t).exp() * self.extent) as f32
+    }
+
+    fn active_sh_degree(&self) -> u32 {
+        (self.step / 1000).min(self.scene.sh_degree)
+    }
+
+    fn next_view(&mut self, count: usize) -> usize {
+        if self.order.is_empty() {
+            self.order = (0..count).collect();
+            for i in (1..count).rev() {
+                let j = (self.rng.next_u64() % (i as u64 + 1)) as usize;
+                self.order.swap(i, j);
+            }
+        }
+        self.order.pop().unwrap()
+    }
+
+    /// One iteration. `read_loss` reads the loss back (costs a sync and a download).
+    pub fn iterate(&mut self, dataset: &Dataset, read_loss: bool) -> Result<()> {
+        self.step += 1;
+        let vi = self.next_view(dataset.train.len());
+        let view = &dataset.train[vi];
+        let settings = RenderSettings {
+            background: self.cfg.background,
+            sh_degree: Some(self.active_sh_degree()),
+            timestamps: self.profile,
+            ..Default::default()
+        };
+        let frame = self.raster.forward(&self.scene, &view.camera, &settings)?;
+        let outputs = self.raster.outputs().unwrap();
+        let mut rec = Recorder::with_timestamps(&self.gpu, self.profile)?;
+        self.grads.record_zero_parameters(&mut rec);
+        let inputs = LossInputs { render: outputs.rgb, target: &self.targets, target_offset: self.target_offsets[vi], mask: None };
+        self.loss.record(&mut rec, view.camera.width, view.camera.height, &inputs)?;
+        let upstream = PixelGradients { rgb: self.loss.dl_drgb(), alpha: None, depth: None, expected_depth: None, features: None };
+        self.backward.record(&mut rec, self.raster.params_buffer(), &frame.params, &upstream, &self.grads, false)?;
+        let s = &self.scene;
+        let g = &self.grads;
+        let m = &self.moments;
+        let k = sh_coeffs(s.sh_degree) as u32;
+        self.adam.record(&mut rec, &s.means, &g.means, &m.means, self.position_lr(), self.step);
+        self.adam.record(&mut rec, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE, self.step);
+        self.adam.record(&mut rec, &s.quats, &g.quats, &m.quats, LR_ROTATION, self.step);
+        self.adam.record(&mut rec, &s.opacity_logits, &g.opacity_logits, &m.opacity_logits, LR_OPACITY, self.step);
+        self.adam.record_split(&mut rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
+        rec.mark("adam");
+        let mut timings = frame.timings;
+        timings.extend(rec.submit_and_wait()?);
+        self.last_timings = timings;
+        if read_loss {
+            let (loss, l1, _) = self.loss.read_values()?;
+            self.last_loss = Some((loss, l1));
+        }
+        if self.cfg.densify && self.step <= self.cfg.densify_until {
+            if self.step >= self.cfg.densify_from && self.step % self.cfg.densify_interval == 0 {
+                self.densify()?;
+            }
+            if self.step % self.cfg.opacity_reset_interval == 0 {
+                self.reset_opacity()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Downloads the current scene.
+    pub fn download_scene(&self) -> Result<GaussianScene> {
+        let g = &self.gpu;
+        let s = &self.scene;
+        let n = s.num_gaussians as usize;
+        let k = sh_coeffs(s.sh_degree);
+        let f = |b: &Buffer, per: usize| b.download::<f32>(g, n * per);
+        let means = f(&s.means, 3)?;
+        let scales = f(&s.log_scales, 3)?;
+        let quats = f(&s.quats, 4)?;
+        Ok(GaussianScene {
+            means: means.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            normals: vec![[0.0; 3]; n],
+            log_scales: scales.chunks(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            quats: quats.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]).collect(),
+            opacity_logits: f(&s.opacity_logits, 1)?,
+            sh_degree: s.sh_degree,
+            sh: f(&s.sh, 3 * k)?,
+            extras: Vec::new(),
+        })
+    }
+
+    fn download_moments(&self, m: &Moments) -> Result<(Vec<f32>, Vec<f32>)> {
+        Ok((m.m.download(&self.gpu, m.len as usize)?, m.v.download(&self.gpu, m.len as usize)?))
+    }
+
+    /// Replaces the scene; `keep[i]` = Some(old index) carries that Gaussian's Adam moments, None starts
+    /// from zero.
+    fn replace_scene(&mut self, scene: &GaussianScene, keep: &[Option<usize>]) -> Result<()> {
+        let gpu = self.gpu.clone();
+        let carry = |m: &Moments, per: usize| -> Result<Moments> {
+            let (mm, vv) = self.download_moments(m)?;
+            let pick = |src: &[f32]| -> Vec<f32> {
+                keep.iter().flat_map(|o| match o {
+                    Some(i) => src[i * per..(i + 1) * per].to_vec(),
+                    None => vec![0.0; per],
+                })
+                .collect()
+            };
+            Ok(Moments {
+                m: Buffer::from_slice(&gpu, "adam m", &pick(&mm))?,
+                v: Buffer::from_slice(&gpu, "adam v", &pick(&vv))?,
+                len: (keep.len() * per) as u32,
+            })
+        };
+        let k = sh_coeffs(scene.sh_degree);
+        let moments = GroupMoments {
+            means: carry(&self.moments.means, 3)?,
+            log_scales: carry(&self.moments.log_scales, 3)?,
+            quats: carry(&self.moments.quats, 4)?,
+            opacity_logits: carry(&self.moments.opacity_logits, 1)?,
+            sh: carry(&self.moments.sh, 3 * k)?,
+        };
+        self.moments = moments;
+        self.scene = SceneBuffers::upload(&gpu, scene, None)?;
+        self.grads = SceneGradients::new(&gpu, &self.scene)?;
+        Ok(())
+    }
+
+    /// INRIA adaptive density control: clone small / split large Gaussians whose mean view-space
+    /// gradient exceeds the threshold, prune transparent and oversized ones.
+    fn densify(&mut self) -> Result<()> {
+        let n = self.scene.num_gaussians as usize;
+        let sums: Vec<f32> = self.grads.xy_norm_sum.download(&self.gpu, n)?;
+        let views: Vec<u32> = self.grads.xy_views.download(&self.gpu, n)?;
+        let scene = self.download_scene()?;
+        let k = scene.sh_coeffs();
+        let extent = self.extent as f32;
+        let mut out = GaussianScene { sh_degree: scene.sh_degree, ..Default::default() };
+        let mut keep: Vec<Option<usize>> = Vec::new();
+        let budget = self.cfg.max_gaussians;
+        let push = |out: &mut GaussianScene, keep: &mut Vec<Option<usize>>, i: usize, mean: [f32; 3], log_scale: [f32; 3], carried: bool| {
+            out.means.push(mean);
+            out.normals.push([0.0; 3]);
+            out.log_scales.push(log_scale);
+            out.quats.push(scene.quats[i]);
+            out.opacity_logits.push(scene.opacity_logits[i]);
+            out.sh.extend_from_slice(&scene.sh[i * k * 3..(i + 1) * k * 3]);
+            keep.push(if carried { Some(i) } else { None });
+        };
+        let mut grown = n;
+        for i in 0..n {
+            let opacity = 1.0 / (1.0 + (-scene.opacity_logits[i]).exp());
+            let max_scale = scene.log_scales[i].iter().fold(f32::MIN, |a, &b| a.max(b)).exp();
+            // prune: nearly transparent, or huge in the world once opacity has been reset once
+            if opacity < 0.005 || (self.step > self.cfg.opacity_reset_interval && max_scale > 0.1 * extent) {
+                continue;
+            }
+            let grad = if views[i] > 0 { sums[i] / views[i] as f32 } else { 0.0 };
+            let dense = grad >= self.cfg.grad_threshold && grown < budget;
+            if dense && max_scale <= 0.01 * extent {
+                // clone: same Gaussian twice
+                push(&mut out, &mut keep, i, scene.means[i], scene.log_scales[i], true);
+                push(&mut out, &mut keep, i, scene.means[i], scene.log_scales[i], false);
+                grown += 1;
+            } else if dense {
+                // split into two samples of the Gaussian, scales divided by 1.6
+                let r = quat_to_matrix(scene.quats[i].map(|v| v as f64));
+                let s = scene.log_scales[i].map(|v| (v as f64).exp());
+                for _ in 0..2 {
+                    let z = [self.rng.normal() * s[0], self.rng.normal() * s[1], self.rng.normal() * s[2]];
+                    let off: Vec<f64> = (0..3).map(|a| r[a][0] * z[0] + r[a][1] * z[1] + r[a][2] * z[2]).collect();
+                    let mean = [0, 1, 2].map(|a| scene.means[i][a] + off[a] as f32);
+                    let ls = scene.log_scales[i].map(|v| v - 1.6f32.ln());
+                    push(&mut out, &mut keep, i, mean, ls, false);
+                }
+                grown += 1;
+            } else {
+                push(&mut out, &mut keep, i, scene.means[i], scene.log_scales[i], true);
+            }
+        }
+        if out.is_empty() {
+            bail!("densification pruned every Gaussian (step {})", self.step);
+        }
+        self.replace_scene(&out, &keep)
+    }
+
+    /// Sets every opacity to at most 0.01 and clears its Adam state (INRIA's opacity reset).
+    fn reset_opacity(&mut self) -> Result<()> {
+        let n = self.scene.num_gaussians as usize;
+        let cap = logit(0.01);
+        let ops: Vec<f32> = self.scene.opacity_logits.download::<f32>(&self.gpu, n)?.iter().map(|&v| v.min(cap)).collect();
+        self.scene.opacity_logits.upload(&self.gpu, &ops)?;
+        let m = &self.moments.opacity_logits;
+        let mut rec = Recorder::new(&self.gpu)?;
+        rec.fill(&m.m, 0, m.m.size(), 0);
+        rec.fill(&m.v, 0, m.v.size(), 0);
+        rec.submit_and_wait()?;
+        Ok(())
+    }
+
+    /// Renders `views` and compares them with their images: mean PSNR and SSIM.
+    pub fn evaluate(&mut self, views: &[View]) -> Result<Metrics> {
+        let mut metrics = Metrics { views: views.len(), ..Default::default() };
+        if views.is_empty() {
+            return Ok(metrics);
+        }
+        let settings = RenderSettings { background: self.cfg.background, sh_degree: Some(self.active_sh_degree()), ..Default::default() };
+        for v in views {
+            let out = self.raster.render(&self.scene, &v.camera, &settings)?;
+            let x: Vec<f64> = out.rgb.iter().map(|&c| c.clamp(0.0, 1.0) as f64).collect();
+            let y: Vec<f64> = v.image.iter().map(|&c| c as f64).collect();
+            let mse = x.iter().zip(&y).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / x.len() as f64;
+            metrics.psnr += 10.0 * (1.0 / mse.max(1e-12)).log10();
+            metrics.ssim += loss_ref::ssim(&x, &y, out.width as usize, out.height as usize, None);
+        }
+        metrics.psnr /= views.len() as f64;
+        metrics.ssim /= views.len() as f64;
+        Ok(metrics)
+    }
+
+    /// Restores the optimizer position after a resume.
+    pub fn set_step(&mut self, step: u32) {
+        self.step = step;
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    /// Host copies of the Adam moments, in group order (for checkpoints).
+    pub fn moments_host(&self) -> Result<Vec<(Vec<f32>, Vec<f32>)>> {
+        let m = &self.moments;
+        [&m.means, &m.log_scales, &m.quats, &m.opacity_logits, &m.sh].iter().map(|x| self.download_moments(x)).collect()
+    }
+
+    /// Replaces the Adam moments (from a checkpoint); lengths must match the scene.
+    pub fn load_moments(&mut self, host: &[(Vec<f32>, Vec<f32>)]) -> Result<()> {
+        let mm = &self.moments;
+        let groups = [&mm.means, &mm.log_scales, &mm.quats, &mm.opacity_logits, &mm.sh];
+        if host.len() != groups.len() {
+            bail!("checkpoint has {} optimizer groups, expected {}", host.len(), groups.len());
+        }
+        for (g, (m, v)) in groups.iter().zip(host) {
+            if m.len() != g.len as usize || v.len() != g.len as usize {
+                bail!("checkpoint optimizer state does not match the scene size");
+            }
+            g.m.upload(&self.gpu, m)?;
+            g.v.upload(&self.gpu, v)?;
+        }
+        Ok(())
+    }
+}
