@@ -62,7 +62,8 @@ fn main() {
                 per_pass.entry(p.pass.clone()).or_default().push(p.ms);
             }
         }
-        let passes: Vec<(String, f64)> = order.iter().map(|p| (p.clone(), common::median(per_pass[p].clone()))).collect();
+        let passes: Vec<(String, f64)> =
+            order.iter().map(|p| (p.clone(), common::median(per_pass[p].clone()))).collect();
         let total: f64 = passes.iter().map(|p| p.1).sum();
         let wall_ms = common::median(wall);
         println!("{n} Gaussians at {w}x{h}: GPU {total:.1} ms, wall {wall_ms:.1} ms per iteration");
@@ -73,5 +74,8 @@ fn main() {
             "passes": passes.iter().map(|(p, ms)| serde_json::json!({"pass": p, "ms": ms})).collect::<Vec<_>>()}));
     }
     let path = common::results_path(&format!("train-{}.json", common::device_slug(&gpu)));
-    common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "iterations": iters, "rows": rows }));
+    common::write_json(
+        &path,
+        &serde_json::json!({ "device": gpu.info().summary(), "iterations": iters, "rows": rows }),
+    );
 }

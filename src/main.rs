@@ -400,7 +400,11 @@ fn cmd_train(a: TrainArgs) -> Result<()> {
         gpu.info().name
     );
     let bar = ProgressBar::new(a.iters as u64);
-    bar.set_style(ProgressStyle::with_template("train [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {msg}").unwrap().progress_chars("=> "));
+    bar.set_style(
+        ProgressStyle::with_template("train [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {msg}")
+            .unwrap()
+            .progress_chars("=> "),
+    );
     bar.set_position(t.step as u64);
     let start = std::time::Instant::now();
     let first_step = t.step;

@@ -50,7 +50,17 @@ fn train_synth_scene_survives_a_kill_and_reaches_psnr() {
         .status()
         .unwrap();
     assert!(status.success());
-    for f in ["sparse/0/cameras.txt", "sparse/0/images.txt", "sparse/0/points3D.txt", "images/view_000.png", "object_mask/view_005.png", "gt_background/view_005.png", "depth/view_005.exr", "unseen_mask/view_005.png", "synth.json"] {
+    for f in [
+        "sparse/0/cameras.txt",
+        "sparse/0/images.txt",
+        "sparse/0/points3D.txt",
+        "images/view_000.png",
+        "object_mask/view_005.png",
+        "gt_background/view_005.png",
+        "depth/view_005.exr",
+        "unseen_mask/view_005.png",
+        "synth.json",
+    ] {
         assert!(data.join(f).exists(), "synth did not write {f}");
     }
 
@@ -84,15 +94,16 @@ fn train_synth_scene_survives_a_kill_and_reaches_psnr() {
     assert!(!stderr.contains("vulkan validation:"), "validation messages:\n{stderr}");
     assert!(temporaries(&out).is_empty());
 
-    let metrics: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    let metrics: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
     let psnr = metrics["test"]["psnr"].as_f64().unwrap();
     let ssim = metrics["test"]["ssim"].as_f64().unwrap();
     println!("killed after checkpoint {killed_at}; final test PSNR {psnr:.2} dB, SSIM {ssim:.3}; {}", metrics);
     assert_eq!(metrics["iterations"].as_u64(), Some(1000));
-    // measured 19.0-19.5 dB on lavapipe for this seed and budget; the bar leaves a margin for
-    // float-atomic ordering noise
-    assert!(psnr >= 17.5, "test PSNR {psnr:.2} dB");
-    assert!(ssim >= 0.55, "test SSIM {ssim:.3}");
+    // measured 20.4 dB / SSIM 0.722 on lavapipe for this seed and budget (killed at 300 and resumed);
+    // the bar leaves a margin for the run-to-run noise of float-atomic ordering and the kill point
+    assert!(psnr >= 18.5, "test PSNR {psnr:.2} dB");
+    assert!(ssim >= 0.62, "test SSIM {ssim:.3}");
     let scene = cogeo::scene::ply::read_ply(&out.join("scene.ply")).unwrap();
     scene.validate("trained scene").unwrap();
 }

@@ -62,7 +62,15 @@ impl Adam {
     }
 
     /// As `record`, with two rates: element i uses `rates.0` when i % rates.1 < rates.2, else `rates.3`.
-    pub fn record_split(&self, rec: &mut Recorder, param: &Buffer, grad: &Buffer, moments: &Moments, rates: (f32, u32, u32, f32), step: u32) {
+    pub fn record_split(
+        &self,
+        rec: &mut Recorder,
+        param: &Buffer,
+        grad: &Buffer,
+        moments: &Moments,
+        rates: (f32, u32, u32, f32),
+        step: u32,
+    ) {
         let (lr, period, head, lr_tail) = rates;
         let push = AdamPush {
             param: param.address(),

@@ -67,7 +67,8 @@ pub fn load(out: &Path) -> Result<Option<Checkpoint>> {
     let state: State = serde_json::from_str(&std::fs::read_to_string(dir.join("state.json"))?)
         .with_context(|| format!("{}: corrupt checkpoint state", dir.display()))?;
     let scene = ply::read_ply(&dir.join("scene.ply"))?;
-    let bytes = std::fs::read(dir.join("moments.bin")).with_context(|| format!("{}: cannot read moments", dir.display()))?;
+    let bytes =
+        std::fs::read(dir.join("moments.bin")).with_context(|| format!("{}: cannot read moments", dir.display()))?;
     let mut moments = Vec::new();
     let mut pos = 0;
     while pos < bytes.len() {

@@ -59,14 +59,20 @@ pub fn load(dir: &Path, images: &str) -> Result<Dataset> {
     let mut train = Vec::new();
     let mut test = Vec::new();
     for (i, cam) in model.cameras.iter().enumerate() {
-        let path = find_image(&image_dir, &cam.name)
-            .with_context(|| format!("{}: no image named {}.png/.jpg for a COLMAP view", image_dir.display(), cam.name))?;
+        let path = find_image(&image_dir, &cam.name).with_context(|| {
+            format!("{}: no image named {}.png/.jpg for a COLMAP view", image_dir.display(), cam.name)
+        })?;
         let (w, h, rgb) = load_rgb(&path)?;
         // downscaled folders: scale the intrinsics to the image actually loaded
         let camera = if (w, h) != (cam.width, cam.height) {
             let (sx, sy) = (w as f64 / cam.width as f64, h as f64 / cam.height as f64);
             if (sx / sy - 1.0).abs() > 0.02 {
-                bail!("{}: {w}x{h} does not match the aspect of the COLMAP camera {}x{}", path.display(), cam.width, cam.height);
+                bail!(
+                    "{}: {w}x{h} does not match the aspect of the COLMAP camera {}x{}",
+                    path.display(),
+                    cam.width,
+                    cam.height
+                );
             }
             cam.resized(w, h)
         } else {

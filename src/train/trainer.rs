@@ -221,9 +221,15 @@ impl Trainer {
         let outputs = self.raster.outputs().unwrap();
         let mut rec = Recorder::with_timestamps(&self.gpu, self.profile)?;
         self.grads.record_zero_parameters(&mut rec);
-        let inputs = LossInputs { render: outputs.rgb, target: &self.targets, target_offset: self.target_offsets[vi], mask: None };
+        let inputs = LossInputs {
+            render: outputs.rgb,
+            target: &self.targets,
+            target_offset: self.target_offsets[vi],
+            mask: None,
+        };
         self.loss.record(&mut rec, view.camera.width, view.camera.height, &inputs)?;
-        let upstream = PixelGradients { rgb: self.loss.dl_drgb(), alpha: None, depth: None, expected_depth: None, features: None };
+        let upstream =
+            PixelGradients { rgb: self.loss.dl_drgb(), alpha: None, depth: None, expected_depth: None, features: None };
         self.backward.record(&mut rec, self.raster.params_buffer(), &frame.params, &upstream, &self.grads, false)?;
         let s = &self.scene;
         let g = &self.grads;
@@ -286,11 +292,12 @@ impl Trainer {
         let carry = |m: &Moments, per: usize| -> Result<Moments> {
             let (mm, vv) = self.download_moments(m)?;
             let pick = |src: &[f32]| -> Vec<f32> {
-                keep.iter().flat_map(|o| match o {
-                    Some(i) => src[i * per..(i + 1) * per].to_vec(),
-                    None => vec![0.0; per],
-                })
-                .collect()
+                keep.iter()
+                    .flat_map(|o| match o {
+                        Some(i) => src[i * per..(i + 1) * per].to_vec(),
+                        None => vec![0.0; per],
+                    })
+                    .collect()
             };
             Ok(Moments {
                 m: Buffer::from_slice(&gpu, "adam m", &pick(&mm))?,
@@ -324,7 +331,12 @@ impl Trainer {
         let mut out = GaussianScene { sh_degree: scene.sh_degree, ..Default::default() };
         let mut keep: Vec<Option<usize>> = Vec::new();
         let budget = self.cfg.max_gaussians;
-        let push = |out: &mut GaussianScene, keep: &mut Vec<Option<usize>>, i: usize, mean: [f32; 3], log_scale: [f32; 3], carried: bool| {
+        let push = |out: &mut GaussianScene,
+                    keep: &mut Vec<Option<usize>>,
+                    i: usize,
+                    mean: [f32; 3],
+                    log_scale: [f32; 3],
+                    carried: bool| {
             out.means.push(mean);
             out.normals.push([0.0; 3]);
             out.log_scales.push(log_scale);
@@ -374,7 +386,8 @@ impl Trainer {
     fn reset_opacity(&mut self) -> Result<()> {
         let n = self.scene.num_gaussians as usize;
         let cap = logit(0.01);
-        let ops: Vec<f32> = self.scene.opacity_logits.download::<f32>(&self.gpu, n)?.iter().map(|&v| v.min(cap)).collect();
+        let ops: Vec<f32> =
+            self.scene.opacity_logits.download::<f32>(&self.gpu, n)?.iter().map(|&v| v.min(cap)).collect();
         self.scene.opacity_logits.upload(&self.gpu, &ops)?;
         let m = &self.moments.opacity_logits;
         let mut rec = Recorder::new(&self.gpu)?;
@@ -390,7 +403,11 @@ impl Trainer {
         if views.is_empty() {
             return Ok(metrics);
         }
-        let settings = RenderSettings { background: self.cfg.background, sh_degree: Some(self.active_sh_degree()), ..Default::default() };
+        let settings = RenderSettings {
+            background: self.cfg.background,
+            sh_degree: Some(self.active_sh_degree()),
+            ..Default::default()
+        };
         for v in views {
             let out = self.raster.render(&self.scene, &v.camera, &settings)?;
             let x: Vec<f64> = out.rgb.iter().map(|&c| c.clamp(0.0, 1.0) as f64).collect();
