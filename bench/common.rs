@@ -16,6 +16,27 @@ pub fn arg(args: &[String], name: &str) -> Option<String> {
     args.iter().position(|a| a == name).and_then(|i| args.get(i + 1).cloned())
 }
 
+/// Comma-separated counts of `--name` (e.g. --sizes 100000,1000000), or `default`.
+pub fn counts(args: &[String], name: &str, default: &str) -> Vec<usize> {
+    arg(args, name)
+        .unwrap_or_else(|| default.into())
+        .split(',')
+        .map(|s| s.parse().unwrap_or_else(|_| panic!("{name}: comma-separated counts, got {s:?}")))
+        .collect()
+}
+
+/// Comma-separated WxH resolutions of `--name`, or `default`.
+pub fn resolutions(args: &[String], name: &str, default: &str) -> Vec<(u32, u32)> {
+    arg(args, name)
+        .unwrap_or_else(|| default.into())
+        .split(',')
+        .map(|r| {
+            let (w, h) = r.split_once('x').unwrap_or_else(|| panic!("{name}: WxH, got {r:?}"));
+            (w.parse().unwrap(), h.parse().unwrap())
+        })
+        .collect()
+}
+
 pub fn gpu() -> Gpu {
     Gpu::new(&DeviceChoice::from_env(None)).expect("cannot create the Vulkan context")
 }

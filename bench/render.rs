@@ -14,19 +14,8 @@ use std::time::Instant;
 
 fn main() {
     let args = common::args();
-    let sizes: Vec<usize> = common::arg(&args, "--sizes")
-        .unwrap_or_else(|| "100000,1000000,3000000".into())
-        .split(',')
-        .map(|s| s.parse().expect("--sizes: comma-separated counts"))
-        .collect();
-    let resolutions: Vec<(u32, u32)> = common::arg(&args, "--resolutions")
-        .unwrap_or_else(|| "512x512,1920x1080".into())
-        .split(',')
-        .map(|r| {
-            let (w, h) = r.split_once('x').expect("--resolutions: WxH,...");
-            (w.parse().unwrap(), h.parse().unwrap())
-        })
-        .collect();
+    let sizes = common::counts(&args, "--sizes", "100000,1000000,3000000");
+    let resolutions = common::resolutions(&args, "--resolutions", "512x512,1920x1080");
     let frames: usize = common::arg(&args, "--frames").map(|f| f.parse().unwrap()).unwrap_or(3);
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());

@@ -15,11 +15,7 @@ use std::time::Instant;
 
 fn main() {
     let args = common::args();
-    let sizes: Vec<usize> = common::arg(&args, "--sizes")
-        .unwrap_or_else(|| "1000000,4000000,16000000".into())
-        .split(',')
-        .map(|s| s.parse().expect("--sizes: comma-separated counts"))
-        .collect();
+    let sizes = common::counts(&args, "--sizes", "1000000,4000000,16000000");
     let runs: usize = common::arg(&args, "--runs").map(|f| f.parse().unwrap()).unwrap_or(3);
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());

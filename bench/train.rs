@@ -17,17 +17,8 @@ use std::time::Instant;
 
 fn main() {
     let args = common::args();
-    let sizes: Vec<usize> = common::arg(&args, "--sizes")
-        .unwrap_or_else(|| "100000,1000000".into())
-        .split(',')
-        .map(|s| s.parse().expect("--sizes: comma-separated counts"))
-        .collect();
-    let (w, h) = common::arg(&args, "--resolution")
-        .map(|r| {
-            let (a, b) = r.split_once('x').expect("--resolution WxH");
-            (a.parse().unwrap(), b.parse().unwrap())
-        })
-        .unwrap_or((512u32, 512u32));
+    let sizes = common::counts(&args, "--sizes", "100000,1000000");
+    let (w, h) = common::resolutions(&args, "--resolution", "512x512")[0];
     let iters: usize = common::arg(&args, "--iters").map(|v| v.parse().unwrap()).unwrap_or(5);
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());

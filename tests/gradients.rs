@@ -153,29 +153,54 @@ fn param_mut<'a>(s: &'a mut GaussianScene, f: &'a mut [f32], p: Param) -> &'a mu
     }
 }
 
-/// Central difference of the loss along one parameter, over the actual (float32-rounded) step.
-fn finite_difference(
-    scene: &GaussianScene,
-    feats: &[f32],
-    d: usize,
-    cam: &Camera,
+/// The fixed data of a finite-difference check: scene, features, camera, background, loss weights.
+struct Problem<'a> {
+    scene: &'a GaussianScene,
+    feats: &'a [f32],
+    dim: usize,
+    cam: &'a Camera,
     bg: [f64; 3],
-    w: &Weights,
-    p: Param,
-    h: f64,
-) -> f64 {
-    let eval = |delta: f64| -> (f64, f64) {
-        let mut s = scene.clone();
-        let mut f = feats.to_vec();
-        let v = param_mut(&mut s, &mut f, p);
-        *v = (*v as f64 + delta) as f32;
-        let moved = *v as f64;
-        let fo = if d > 0 { Some((f.as_slice(), d)) } else { None };
-        (loss(&s, cam, bg, w, fo), moved)
-    };
-    let (lp, xp) = eval(h);
-    let (lm, xm) = eval(-h);
-    (lp - lm) / (xp - xm)
+    w: &'a Weights,
+}
+
+impl Problem<'_> {
+    /// Central difference of the loss along one parameter, over the actual (float32-rounded) step.
+    fn finite_difference(&self, p: Param, h: f64) -> f64 {
+        let eval = |delta: f64| -> (f64, f64) {
+            let mut s = self.scene.clone();
+            let mut f = self.feats.to_vec();
+            let v = param_mut(&mut s, &mut f, p);
+            *v = (*v as f64 + delta) as f32;
+            let moved = *v as f64;
+            let fo = if self.dim > 0 { Some((f.as_slice(), self.dim)) } else { None };
+            (loss(&s, self.cam, self.bg, self.w, fo), moved)
+        };
+        let (lp, xp) = eval(h);
+        let (lm, xm) = eval(-h);
+        (lp - lm) / (xp - xm)
+    }
+
+    /// Finite differences of every scalar of one group; NaN marks a step that crossed a threshold.
+    fn fd_group(&self, params: &[Param]) -> (Vec<f64>, usize) {
+        let mut skipped = 0;
+        let out = params
+            .iter()
+            .map(|&p| {
+                let x = *param_mut(&mut self.scene.clone(), &mut self.feats.to_vec(), p) as f64;
+                // small: a hard 1/255 cutoff means a footprint moved by h crosses pixel centers with probability ~h
+                let h = 1e-5 * x.abs().max(0.1);
+                let a = self.finite_difference(p, h);
+                let b = self.finite_difference(p, h / 2.0);
+                if (a - b).abs() > 1e-5 * (a.abs() + b.abs()) + 1e-7 {
+                    skipped += 1;
+                    f64::NAN
+                } else {
+                    (4.0 * b - a) / 3.0 // Richardson extrapolation of the two central differences
+                }
+            })
+            .collect();
+        (out, skipped)
+    }
 }
 
 struct GroupCheck {
@@ -214,36 +239,6 @@ fn check_group(c: &GroupCheck) {
     assert!(worst.0 <= 1e-3, "{}: element {} relative error {:.3e}", c.name, worst.1, worst.0);
 }
 
-/// Finite differences of every scalar of one group; NaN marks a step that crossed a threshold.
-fn fd_group(
-    scene: &GaussianScene,
-    feats: &[f32],
-    d: usize,
-    cam: &Camera,
-    bg: [f64; 3],
-    w: &Weights,
-    params: &[Param],
-) -> (Vec<f64>, usize) {
-    let mut skipped = 0;
-    let out = params
-        .iter()
-        .map(|&p| {
-            let x = *param_mut(&mut scene.clone(), &mut feats.to_vec(), p) as f64;
-            // small: a hard 1/255 cutoff means a footprint moved by h crosses pixel centers with probability ~h
-            let h = 1e-5 * x.abs().max(0.1);
-            let a = finite_difference(scene, feats, d, cam, bg, w, p, h);
-            let b = finite_difference(scene, feats, d, cam, bg, w, p, h / 2.0);
-            if (a - b).abs() > 1e-5 * (a.abs() + b.abs()) + 1e-7 {
-                skipped += 1;
-                f64::NAN
-            } else {
-                (4.0 * b - a) / 3.0 // Richardson extrapolation of the two central differences
-            }
-        })
-        .collect();
-    (out, skipped)
-}
-
 fn run_gradient_check(degree: u32, cas: bool, seed: u64) {
     let scene = scene(seed, 24, degree);
     let cam = camera();
@@ -262,7 +257,8 @@ fn run_gradient_check(degree: u32, cas: bool, seed: u64) {
         ("sh", g.sh, (0..n * k * 3).map(Param::Sh).collect()),
     ];
     for (name, gpu_values, params) in groups {
-        let (fd, skipped) = fd_group(&scene, &[], 0, &cam, bgd, &w, &params);
+        let problem = Problem { scene: &scene, feats: &[], dim: 0, cam: &cam, bg: bgd, w: &w };
+        let (fd, skipped) = problem.fd_group(&params);
         check_group(&GroupCheck { name, gpu: gpu_values, fd, skipped });
     }
 }
@@ -295,7 +291,8 @@ fn feature_gradients_match_finite_differences() {
     for cas in [false, true] {
         let g = gpu_gradients(&scene, &cam, [0.0; 3], &w, Some((&feats, d)), cas);
         let params: Vec<Param> = (0..feats.len()).map(Param::Feature).collect();
-        let (fd, skipped) = fd_group(&scene, &feats, d, &cam, [0.0; 3], &w, &params);
+        let problem = Problem { scene: &scene, feats: &feats, dim: d, cam: &cam, bg: [0.0; 3], w: &w };
+        let (fd, skipped) = problem.fd_group(&params);
         check_group(&GroupCheck {
             name: if cas { "features (cas)" } else { "features" },
             gpu: g.features,
