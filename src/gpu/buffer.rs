@@ -83,6 +83,15 @@ impl Buffer {
         Ok(Buffer { gpu: shared.clone(), buffer, allocation: Some(allocation), size, address })
     }
 
+    /// Allocates a device buffer of `size` bytes filled with zeros.
+    pub fn zeroed(gpu: &Gpu, name: &str, size: u64) -> Result<Buffer> {
+        let buffer = Buffer::new(gpu, name, size, MemoryKind::Device)?;
+        let mut rec = super::Recorder::new(gpu)?;
+        rec.fill(&buffer, 0, buffer.size(), 0);
+        rec.submit_and_wait()?;
+        Ok(buffer)
+    }
+
     /// Allocates a device buffer holding `data`.
     pub fn from_slice<T: bytemuck::Pod>(gpu: &Gpu, name: &str, data: &[T]) -> Result<Buffer> {
         let buffer = Buffer::new(gpu, name, std::mem::size_of_val(data) as u64, MemoryKind::Device)?;

@@ -75,8 +75,8 @@ impl SceneGradients {
     pub fn new(gpu: &Gpu, scene: &SceneBuffers) -> Result<SceneGradients> {
         let n = scene.num_gaussians as u64;
         let k = ((scene.sh_degree + 1) * (scene.sh_degree + 1)) as u64;
-        let buf = |name: &str, per: u64| Buffer::new(gpu, name, n * per * 4, MemoryKind::Device);
-        let grads = SceneGradients {
+        let buf = |name: &str, per: u64| Buffer::zeroed(gpu, name, n * per * 4);
+        Ok(SceneGradients {
             means: buf("grad means", 3)?,
             log_scales: buf("grad log_scales", 3)?,
             quats: buf("grad quats", 4)?,
@@ -86,24 +86,7 @@ impl SceneGradients {
             xy_norm_sum: buf("grad xy norm sum", 1)?,
             xy_views: buf("grad xy views", 1)?,
             num_gaussians: scene.num_gaussians,
-        };
-        let mut rec = Recorder::new(gpu)?;
-        grads.record_zero(&mut rec);
-        rec.submit_and_wait()?;
-        Ok(grads)
-    }
-
-    fn all(&self) -> impl Iterator<Item = &Buffer> {
-        [&self.means, &self.log_scales, &self.quats, &self.opacity_logits, &self.sh, &self.xy_norm_sum, &self.xy_views]
-            .into_iter()
-            .chain(self.features.as_ref())
-    }
-
-    /// Records zeroing of every gradient (before a new optimization step).
-    pub fn record_zero(&self, rec: &mut Recorder) {
-        for b in self.all() {
-            rec.fill(b, 0, b.size(), 0);
-        }
+        })
     }
 
     /// Records zeroing of the parameter gradients only (keeps the densification statistics).
@@ -178,8 +161,8 @@ impl Backward {
             return Ok(());
         }
         self.view = None;
-        let cap = n.max(1024) as u64;
-        let buf = |name: &str, per: u64| Buffer::new(&self.gpu, name, cap * per * 4, MemoryKind::Device);
+        let cap = super::grow(n as u64);
+        let buf = |name: &str, per: u64| Buffer::zeroed(&self.gpu, name, cap * per * 4);
         let view = ViewGradients {
             capacity: cap as u32,
             xy: buf("view grad xy", 2)?,
@@ -188,11 +171,6 @@ impl Backward {
             color: buf("view grad color", 3)?,
             depth: buf("view grad depth", 1)?,
         };
-        let mut rec = Recorder::new(&self.gpu)?;
-        for b in [&view.xy, &view.conic, &view.opacity, &view.color, &view.depth] {
-            rec.fill(b, 0, b.size(), 0);
-        }
-        rec.submit_and_wait()?;
         self.view = Some(view);
         Ok(())
     }

@@ -181,7 +181,8 @@ pub struct Rasterizer {
     image: Option<ImageBuffers>,
 }
 
-fn grow(n: u64) -> u64 {
+/// Capacity to allocate for `n` elements: headroom so growing scenes do not reallocate every time.
+pub(crate) fn grow(n: u64) -> u64 {
     (n + n / 4).max(1024)
 }
 

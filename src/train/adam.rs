@@ -1,6 +1,6 @@
 //! Adam on the GPU (adam.comp), one parameter tensor per dispatch, with per-tensor learning rates.
 
-use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
 use crate::shaders;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -37,12 +37,8 @@ pub struct Moments {
 
 impl Moments {
     pub fn new(gpu: &Gpu, name: &str, len: u32) -> Result<Moments> {
-        let m = Buffer::new(gpu, &format!("{name} adam m"), len as u64 * 4, MemoryKind::Device)?;
-        let v = Buffer::new(gpu, &format!("{name} adam v"), len as u64 * 4, MemoryKind::Device)?;
-        let mut rec = Recorder::new(gpu)?;
-        rec.fill(&m, 0, m.size(), 0);
-        rec.fill(&v, 0, v.size(), 0);
-        rec.submit_and_wait()?;
+        let m = Buffer::zeroed(gpu, &format!("{name} adam m"), len as u64 * 4)?;
+        let v = Buffer::zeroed(gpu, &format!("{name} adam v"), len as u64 * 4)?;
         Ok(Moments { m, v, len })
     }
 }
