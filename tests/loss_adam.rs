@@ -126,3 +126,56 @@ fn adam_matches_cpu_for_several_steps() {
         p.iter().zip(image(&mut Rng::new(5), n)).map(|(a, b)| (a - b).abs() as f64).sum::<f64>() / n as f64;
     assert!(moved > 0.01, "mean movement {moved}");
 }
+
+#[test]
+fn trust_region_clips_each_tensors_update_to_the_radius() {
+    let g = gpu();
+    let mut adam = Adam::new(&g).unwrap();
+    let mut rng = Rng::new(9);
+    // two tensors clipped in one submission (separate scratch slots), one of them inside the region
+    let sizes = [5000usize, 300];
+    let radii = [0.05f32, 10.0];
+    let params: Vec<Vec<f32>> = sizes.iter().map(|&n| image(&mut rng, n)).collect();
+    let grads: Vec<Vec<f32>> = sizes.iter().map(|&n| (0..n).map(|_| rng.normal() as f32).collect()).collect();
+    let p_bufs: Vec<Buffer> = params.iter().map(|p| Buffer::from_slice(&g, "p", p).unwrap()).collect();
+    let g_bufs: Vec<Buffer> = grads.iter().map(|x| Buffer::from_slice(&g, "g", x).unwrap()).collect();
+    let moments: Vec<Moments> = sizes.iter().map(|&n| Moments::new(&g, "p", n as u32).unwrap()).collect();
+    let lr = 0.01f32;
+    let mut rec = Recorder::new(&g).unwrap();
+    for t in 0..2 {
+        adam.record_clipped(&mut rec, &p_bufs[t], &g_bufs[t], &moments[t], (lr, 1, 1, lr), 1, radii[t], t).unwrap();
+    }
+    rec.submit_and_wait().unwrap();
+    for t in 0..2 {
+        let got: Vec<f32> = p_bufs[t].download(&g, sizes[t]).unwrap();
+        // first Adam step: u = lr * g / (|g| + eps') ~ lr * sign(g)
+        let u: Vec<f64> = grads[t]
+            .iter()
+            .map(|&gi| {
+                let gi = gi as f64;
+                let m = (1.0 - BETA1 as f64) * gi / (1.0 - BETA1 as f64);
+                let v = (1.0 - BETA2 as f64) * gi * gi / (1.0 - BETA2 as f64);
+                lr as f64 * m / (v.sqrt() + EPS as f64)
+            })
+            .collect();
+        let norm = u.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let s = if norm > radii[t] as f64 { radii[t] as f64 / norm } else { 1.0 };
+        let step_norm = got.iter().zip(&params[t]).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>().sqrt();
+        let err = got
+            .iter()
+            .zip(&params[t])
+            .zip(&u)
+            .map(|((a, b), ui)| ((*b as f64 - s * ui) - *a as f64).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "tensor {t}: unclipped |u| {norm:.4}, radius {}, applied |dp| {step_norm:.6}, max error {err:.2e}",
+            radii[t]
+        );
+        assert!(err < 1e-6, "tensor {t}: error {err}");
+        if norm > radii[t] as f64 {
+            assert!((step_norm - radii[t] as f64).abs() < 1e-4 * radii[t] as f64, "clip does not hold: {step_norm}");
+        } else {
+            assert!((step_norm - norm).abs() < 1e-4 * norm, "unclipped update changed: {step_norm} vs {norm}");
+        }
+    }
+}

@@ -107,3 +107,86 @@ fn train_synth_scene_survives_a_kill_and_reaches_psnr() {
     let scene = cogeo::scene::ply::read_ply(&out.join("scene.ply")).unwrap();
     scene.validate("trained scene").unwrap();
 }
+
+/// Frozen groups do not move; with a trust radius, each geometry tensor moves at most that far per step.
+#[test]
+fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
+    use cogeo::demo::Rng;
+    use cogeo::gpu::{DeviceChoice, Gpu};
+    use cogeo::scene::{Camera, GaussianScene};
+    use cogeo::train::dataset::{Dataset, View};
+    use cogeo::train::trainer::{Frozen, TrainConfig, Trainer};
+    let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
+    let gpu = Gpu::new(&DeviceChoice { selector: None, validate }).unwrap();
+    let mut rng = Rng::new(4);
+    let mut scene = GaussianScene { sh_degree: 1, ..Default::default() };
+    for _ in 0..300 {
+        scene.means.push([rng.range(-1.0, 1.0) as f32, rng.range(-0.8, 0.8) as f32, rng.range(-0.5, 0.5) as f32]);
+        scene.normals.push([0.0; 3]);
+        scene.log_scales.push([-2.5; 3]);
+        scene.quats.push([1.0, 0.1, 0.0, 0.0]);
+        scene.opacity_logits.push(0.0);
+        scene.sh.extend((0..12).map(|_| (0.5 * rng.normal()) as f32));
+    }
+    let camera = Camera::look_at("v", 40, 30, 60.0, [0.0, -0.2, -3.0], [0.0; 3], [0.0, -1.0, 0.0]);
+    let image: Vec<f32> = (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect();
+    let data = Dataset {
+        train: vec![View { camera, image, path: "t".into() }],
+        test: vec![],
+        points: vec![],
+        extent: 2.0,
+        warnings: vec![],
+    };
+    let cfg = TrainConfig { iters: 100, densify: false, ..Default::default() };
+    let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
+
+    t.frozen = Frozen::geometry();
+    for _ in 0..3 {
+        t.iterate(&data, false).unwrap();
+    }
+    let after = t.download_scene().unwrap();
+    assert_eq!(after.means, scene.means, "frozen means moved");
+    assert_eq!(after.log_scales, scene.log_scales, "frozen scales moved");
+    assert_eq!(after.quats, scene.quats, "frozen rotations moved");
+    assert_ne!(after.sh, scene.sh, "SH did not train");
+    assert_ne!(after.opacity_logits, scene.opacity_logits, "opacity did not train");
+
+    let radius = 2e-3f32;
+    t.frozen = Frozen::default();
+    t.trust_radius = Some(radius);
+    let norm = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter().flatten().zip(b.iter().flatten()).map(|(x, y)| ((x - y) as f64).powi(2)).sum::<f64>().sqrt()
+    };
+    let mut moved = 0.0f64;
+    for _ in 0..3 {
+        let before = t.download_scene().unwrap();
+        t.iterate(&data, false).unwrap();
+        let now = t.download_scene().unwrap();
+        let (dm, ds) = (norm(&now.means, &before.means), norm(&now.log_scales, &before.log_scales));
+        let dq = now
+            .quats
+            .iter()
+            .flatten()
+            .zip(before.quats.iter().flatten())
+            .map(|(x, y)| ((x - y) as f64).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        println!("step: |d means| {dm:.6}, |d log_scales| {ds:.6}, |d quats| {dq:.6} (radius {radius})");
+        // the clip is exact on the computed update; storing p - u in float32 rounds each element by up
+        // to half an ulp of |p|, which adds at most sqrt(n) * ulp / 2 to the measured norm
+        let slack = |v: &[f32]| {
+            (v.len() as f64).sqrt() * v.iter().fold(0.0f64, |m, x| m.max(x.abs() as f64)) * f32::EPSILON as f64
+        };
+        let bounds = [
+            slack(before.means.as_flattened()),
+            slack(before.log_scales.as_flattened()),
+            slack(before.quats.as_flattened()),
+        ];
+        for (d, b) in [dm, ds, dq].into_iter().zip(bounds) {
+            assert!(d <= radius as f64 + b, "a tensor moved {d} > {radius} + {b:.2e}");
+        }
+        moved = moved.max(dm);
+    }
+    assert!(moved > 0.5 * radius as f64, "geometry barely moved ({moved}): the bound was not exercised");
+    assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
+}

@@ -43,13 +43,72 @@ impl Moments {
     }
 }
 
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct UpdatePush {
+    grad: u64,
+    m: u64,
+    v: u64,
+    update: u64,
+    partial: u64,
+    n: u32,
+    lr: f32,
+    beta1: f32,
+    beta2: f32,
+    eps: f32,
+    bias1: f32,
+    bias2: f32,
+    period: u32,
+    head: u32,
+    lr_tail: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ReducePush {
+    values: u64,
+    total: u64,
+    count: u32,
+    pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ApplyPush {
+    param: u64,
+    update: u64,
+    total: u64,
+    n: u32,
+    radius: f32,
+}
+
+/// Scratch of the trust-region step: per-element updates, per-workgroup sums, the total.
+struct ClipScratch {
+    capacity: u32,
+    update: Buffer,
+    partial: Buffer,
+    total: Buffer,
+}
+
 pub struct Adam {
+    gpu: Gpu,
     pipeline: ComputePipeline,
+    update: ComputePipeline,
+    reduce: ComputePipeline,
+    apply: ComputePipeline,
+    scratch: Vec<ClipScratch>,
 }
 
 impl Adam {
     pub fn new(gpu: &Gpu) -> Result<Adam> {
-        Ok(Adam { pipeline: ComputePipeline::new(gpu, "adam", shaders::ADAM)? })
+        Ok(Adam {
+            gpu: gpu.clone(),
+            pipeline: ComputePipeline::new(gpu, "adam", shaders::ADAM)?,
+            update: ComputePipeline::new(gpu, "adam_update", shaders::ADAM_UPDATE)?,
+            reduce: ComputePipeline::new(gpu, "reduce_sum", shaders::REDUCE_SUM)?,
+            apply: ComputePipeline::new(gpu, "apply_update", shaders::APPLY_UPDATE)?,
+            scratch: Vec::new(),
+        })
     }
 
     /// Records one step (`step` counts from 1) of `param -= ...` with gradient `grad`.
@@ -85,5 +144,73 @@ impl Adam {
             lr_tail,
         };
         rec.dispatch(&self.pipeline, &push, dispatch_1d(moments.len.div_ceil(256)));
+    }
+
+    /// As `record_split`, with the update of the whole tensor clipped to Euclidean norm `radius`
+    /// (a trust region): p -= u * min(1, radius / |u|). `slot` names a scratch area: tensors clipped
+    /// in the same submission need different slots.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_clipped(
+        &mut self,
+        rec: &mut Recorder,
+        param: &Buffer,
+        grad: &Buffer,
+        moments: &Moments,
+        rates: (f32, u32, u32, f32),
+        step: u32,
+        radius: f32,
+        slot: usize,
+    ) -> Result<()> {
+        let n = moments.len;
+        let groups = n.div_ceil(256);
+        while self.scratch.len() <= slot {
+            self.scratch.push(ClipScratch {
+                capacity: 0,
+                update: Buffer::new(&self.gpu, "trust region update", 4, crate::gpu::MemoryKind::Device)?,
+                partial: Buffer::new(&self.gpu, "trust region partial sums", 4, crate::gpu::MemoryKind::Device)?,
+                total: Buffer::new(&self.gpu, "trust region total", 4, crate::gpu::MemoryKind::Device)?,
+            });
+        }
+        if self.scratch[slot].capacity < n {
+            let cap = crate::render::grow(n as u64);
+            let s = &mut self.scratch[slot];
+            s.update = Buffer::new(&self.gpu, "trust region update", cap * 4, crate::gpu::MemoryKind::Device)?;
+            s.partial = Buffer::new(
+                &self.gpu,
+                "trust region partial sums",
+                cap.div_ceil(256) * 4,
+                crate::gpu::MemoryKind::Device,
+            )?;
+            s.capacity = cap as u32;
+        }
+        let s = &self.scratch[slot];
+        let (lr, period, head, lr_tail) = rates;
+        let push = UpdatePush {
+            grad: grad.address(),
+            m: moments.m.address(),
+            v: moments.v.address(),
+            update: s.update.address(),
+            partial: s.partial.address(),
+            n,
+            lr,
+            beta1: BETA1,
+            beta2: BETA2,
+            eps: EPS,
+            bias1: 1.0 - BETA1.powi(step as i32),
+            bias2: 1.0 - BETA2.powi(step as i32),
+            period,
+            head,
+            lr_tail,
+        };
+        rec.dispatch(&self.update, &push, dispatch_1d(groups));
+        rec.dispatch(
+            &self.reduce,
+            &ReducePush { values: s.partial.address(), total: s.total.address(), count: groups, pad: 0 },
+            [1, 1, 1],
+        );
+        let apply =
+            ApplyPush { param: param.address(), update: s.update.address(), total: s.total.address(), n, radius };
+        rec.dispatch(&self.apply, &apply, dispatch_1d(groups));
+        Ok(())
     }
 }

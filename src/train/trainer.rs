@@ -52,6 +52,23 @@ impl Default for TrainConfig {
     }
 }
 
+/// Which parameter groups are frozen (no update).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct Frozen {
+    pub means: bool,
+    pub log_scales: bool,
+    pub quats: bool,
+    pub opacity: bool,
+    pub sh: bool,
+}
+
+impl Frozen {
+    /// Geometry (means, scales, rotations) frozen; color and opacity train.
+    pub fn geometry() -> Frozen {
+        Frozen { means: true, log_scales: true, quats: true, ..Default::default() }
+    }
+}
+
 /// Learning rates (conventions.md, INRIA defaults).
 pub const LR_POSITION_INIT: f64 = 1.6e-4;
 pub const LR_POSITION_FINAL: f64 = 1.6e-6;
@@ -145,6 +162,11 @@ pub struct Trainer {
     pub last_loss: Option<(f64, f64)>,
     /// Record GPU timestamps per pass (see `last_timings`).
     pub profile: bool,
+    /// Groups that get no update.
+    pub frozen: Frozen,
+    /// When set, each geometry tensor's (means, scales, rotations) update per step is clipped to
+    /// this Euclidean norm (a trust region).
+    pub trust_radius: Option<f32>,
     pub last_timings: Vec<crate::gpu::PassTiming>,
 }
 
@@ -178,6 +200,8 @@ impl Trainer {
             cfg,
             last_loss: None,
             profile: false,
+            frozen: Frozen::default(),
+            trust_radius: None,
             last_timings: Vec::new(),
         })
     }
@@ -235,11 +259,27 @@ impl Trainer {
         let g = &self.grads;
         let m = &self.moments;
         let k = sh_coeffs(s.sh_degree) as u32;
-        self.adam.record(&mut rec, &s.means, &g.means, &m.means, self.position_lr(), self.step);
-        self.adam.record(&mut rec, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE, self.step);
-        self.adam.record(&mut rec, &s.quats, &g.quats, &m.quats, LR_ROTATION, self.step);
-        self.adam.record(&mut rec, &s.opacity_logits, &g.opacity_logits, &m.opacity_logits, LR_OPACITY, self.step);
-        self.adam.record_split(&mut rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
+        let f = self.frozen;
+        let geometry = [
+            (f.means, &s.means, &g.means, &m.means, self.position_lr()),
+            (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE),
+            (f.quats, &s.quats, &g.quats, &m.quats, LR_ROTATION),
+        ];
+        for (slot, (frozen, param, grad, moments, lr)) in geometry.into_iter().enumerate() {
+            match (frozen, self.trust_radius) {
+                (true, _) => {}
+                (false, Some(radius)) => {
+                    self.adam.record_clipped(&mut rec, param, grad, moments, (lr, 1, 1, lr), self.step, radius, slot)?
+                }
+                (false, None) => self.adam.record(&mut rec, param, grad, moments, lr, self.step),
+            }
+        }
+        if !f.opacity {
+            self.adam.record(&mut rec, &s.opacity_logits, &g.opacity_logits, &m.opacity_logits, LR_OPACITY, self.step);
+        }
+        if !f.sh {
+            self.adam.record_split(&mut rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
+        }
         rec.mark("adam");
         let mut timings = frame.timings;
         timings.extend(rec.submit_and_wait()?);
