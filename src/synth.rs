@@ -7,8 +7,9 @@
 //! background that no training view sees.
 
 use crate::demo::Rng;
-use crate::io::{write_atomic, write_exr, write_png};
+use crate::io::{write_atomic, write_exr, write_png, write_png_rgb};
 use crate::scene::Camera;
+use crate::train::dataset::is_test_view;
 use anyhow::{bail, Context, Result};
 use std::io::Write;
 use std::path::Path;
@@ -390,21 +391,6 @@ pub fn qvec_from_rotation(r: &[[f64; 3]; 3]) -> [f64; 4] {
     q.map(|v| v * sign)
 }
 
-/// Is this view a held-out test view (every 8th, Mip-NeRF 360 protocol)?
-pub fn is_test_view(index: usize) -> bool {
-    index % 8 == 0
-}
-
-fn rgb8(planar: &[f32], hw: usize) -> Vec<u8> {
-    let mut out = vec![0u8; 3 * hw];
-    for i in 0..hw {
-        for c in 0..3 {
-            out[3 * i + c] = crate::io::to_u8(planar[c * hw + i]);
-        }
-    }
-    out
-}
-
 /// Generates the dataset into `out` (created; must be empty or absent).
 pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) -> Result<Vec<Object>> {
     if cfg.objects == 0 || cfg.objects > 8 {
@@ -440,8 +426,8 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         let name = &cam.name;
         let v = &with_objects[i];
         let b = &background[i];
-        write_png(&out.join(format!("images/{name}.png")), w, h, image::ColorType::Rgb8, &rgb8(&v.rgb, hw))?;
-        write_png(&out.join(format!("gt_background/{name}.png")), w, h, image::ColorType::Rgb8, &rgb8(&b.rgb, hw))?;
+        write_png_rgb(&out.join(format!("images/{name}.png")), w, h, &v.rgb)?;
+        write_png_rgb(&out.join(format!("gt_background/{name}.png")), w, h, &b.rgb)?;
         write_png(&out.join(format!("object_mask/{name}.png")), w, h, image::ColorType::L8, &v.labels)?;
         write_exr(&out.join(format!("depth/{name}.exr")), w, h, &[("Y", &v.depth)])?;
         write_exr(&out.join(format!("depth_background/{name}.exr")), w, h, &[("Y", &b.depth)])?;

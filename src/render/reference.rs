@@ -7,6 +7,7 @@
 //! evaluation may legitimately decide the other way. Comparisons skip those pixels, and tests
 //! assert that they are rare.
 
+use crate::scene::camera::rotation_from_qvec;
 use crate::scene::{Camera, GaussianScene};
 
 /// A Gaussian projected in f64.
@@ -103,17 +104,6 @@ fn transpose(a: &M3) -> M3 {
     t
 }
 
-/// Rotation matrix from an (unnormalized) quaternion (w, x, y, z).
-pub fn quat_to_matrix(q: [f64; 4]) -> M3 {
-    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
-    let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
-    [
-        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
-        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
-        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
-    ]
-}
-
 /// Projects Gaussian `i` (None when culled by the near plane or a degenerate covariance).
 pub fn project(
     scene: &GaussianScene,
@@ -128,7 +118,7 @@ pub fn project(
         return None;
     }
     let q = scene.quats[i].map(|v| v as f64);
-    let rq = quat_to_matrix(q);
+    let rq = rotation_from_qvec(q);
     let s = scene.log_scales[i].map(|v| (v as f64).exp());
     let mut ms = rq;
     for row in ms.iter_mut() {

@@ -96,7 +96,8 @@ impl Camera {
     }
 }
 
-/// World-to-camera rotation from a COLMAP quaternion (w, x, y, z).
+/// Rotation matrix of a quaternion (w, x, y, z), normalized first: COLMAP's world-to-camera
+/// rotation, and a Gaussian's rotation.
 pub fn rotation_from_qvec(q: [f64; 4]) -> [[f64; 3]; 3] {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
     let (w, x, y, z) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);

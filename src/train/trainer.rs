@@ -10,8 +10,9 @@ use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
 use crate::demo::Rng;
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
-use crate::render::reference::{quat_to_matrix, SH_C0};
+use crate::render::reference::SH_C0;
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
+use crate::scene::camera::rotation_from_qvec;
 use crate::scene::colmap::Point3D;
 use crate::scene::{sh_coeffs, GaussianScene};
 use anyhow::{bail, Result};
@@ -402,7 +403,7 @@ impl Trainer {
                 grown += 1;
             } else if dense {
                 // split into two samples of the Gaussian, scales divided by 1.6
-                let r = quat_to_matrix(scene.quats[i].map(|v| v as f64));
+                let r = rotation_from_qvec(scene.quats[i].map(|v| v as f64));
                 let s = scene.log_scales[i].map(|v| (v as f64).exp());
                 for _ in 0..2 {
                     let z = [self.rng.normal() * s[0], self.rng.normal() * s[1], self.rng.normal() * s[2]];
