@@ -9,13 +9,10 @@ pub const BETA1: f32 = 0.9;
 pub const BETA2: f32 = 0.999;
 pub const EPS: f32 = 1e-15;
 
+/// The scalars of one Adam step of one tensor; mirrors `AdamStep` in include/adam_step.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct AdamPush {
-    param: u64,
-    grad: u64,
-    m: u64,
-    v: u64,
+struct AdamStep {
     n: u32,
     lr: f32,
     beta1: f32,
@@ -26,6 +23,35 @@ struct AdamPush {
     period: u32,
     head: u32,
     lr_tail: f32,
+}
+
+impl AdamStep {
+    /// Step `step` (from 1) over `n` elements; `rates` = (lr, period, head, lr_tail).
+    fn new(n: u32, rates: (f32, u32, u32, f32), step: u32) -> AdamStep {
+        let (lr, period, head, lr_tail) = rates;
+        AdamStep {
+            n,
+            lr,
+            beta1: BETA1,
+            beta2: BETA2,
+            eps: EPS,
+            bias1: 1.0 - BETA1.powi(step as i32),
+            bias2: 1.0 - BETA2.powi(step as i32),
+            period,
+            head,
+            lr_tail,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct AdamPush {
+    param: u64,
+    grad: u64,
+    m: u64,
+    v: u64,
+    step: AdamStep,
 }
 
 /// First and second moments of one tensor.
@@ -51,16 +77,7 @@ struct UpdatePush {
     v: u64,
     update: u64,
     partial: u64,
-    n: u32,
-    lr: f32,
-    beta1: f32,
-    beta2: f32,
-    eps: f32,
-    bias1: f32,
-    bias2: f32,
-    period: u32,
-    head: u32,
-    lr_tail: f32,
+    step: AdamStep,
 }
 
 #[repr(C)]
@@ -126,22 +143,12 @@ impl Adam {
         rates: (f32, u32, u32, f32),
         step: u32,
     ) {
-        let (lr, period, head, lr_tail) = rates;
         let push = AdamPush {
             param: param.address(),
             grad: grad.address(),
             m: moments.m.address(),
             v: moments.v.address(),
-            n: moments.len,
-            lr,
-            beta1: BETA1,
-            beta2: BETA2,
-            eps: EPS,
-            bias1: 1.0 - BETA1.powi(step as i32),
-            bias2: 1.0 - BETA2.powi(step as i32),
-            period,
-            head,
-            lr_tail,
+            step: AdamStep::new(moments.len, rates, step),
         };
         rec.dispatch(&self.pipeline, &push, dispatch_1d(moments.len.div_ceil(256)));
     }
@@ -184,23 +191,13 @@ impl Adam {
             s.capacity = cap as u32;
         }
         let s = &self.scratch[slot];
-        let (lr, period, head, lr_tail) = rates;
         let push = UpdatePush {
             grad: grad.address(),
             m: moments.m.address(),
             v: moments.v.address(),
             update: s.update.address(),
             partial: s.partial.address(),
-            n,
-            lr,
-            beta1: BETA1,
-            beta2: BETA2,
-            eps: EPS,
-            bias1: 1.0 - BETA1.powi(step as i32),
-            bias2: 1.0 - BETA2.powi(step as i32),
-            period,
-            head,
-            lr_tail,
+            step: AdamStep::new(n, rates, step),
         };
         rec.dispatch(&self.update, &push, dispatch_1d(groups));
         rec.dispatch(

@@ -1,0 +1,21 @@
+// One Adam step of one element, shared by adam.comp and adam_update.comp so both follow PyTorch's
+// formulation (as the INRIA reference uses) exactly:
+//   m = b1 m + (1 - b1) g,  v = b2 v + (1 - b2) g^2,
+//   u = rate * (m / (1 - b1^t)) / (sqrt(v / (1 - b2^t)) + eps)
+// The host passes the bias corrections. Element i uses `lr` when i % period < head and `lr_tail`
+// otherwise (SH: DC vs higher bands). Mirrors `train::adam::AdamStep`.
+struct AdamStep {
+    uint n; float lr; float beta1; float beta2; float eps; float bias1; float bias2;
+    uint period; uint head; float lr_tail;
+};
+
+// Updates the moments of element i and returns its update u (to be subtracted).
+float adam_update(Floats grad, Floats m, Floats v, uint i, AdamStep s) {
+    float g = grad.v[i];
+    float mi = s.beta1 * m.v[i] + (1.0 - s.beta1) * g;
+    float vi = s.beta2 * v.v[i] + (1.0 - s.beta2) * g * g;
+    m.v[i] = mi;
+    v.v[i] = vi;
+    float rate = (i % s.period) < s.head ? s.lr : s.lr_tail;
+    return rate * (mi / s.bias1) / (sqrt(vi / s.bias2) + s.eps);
+}
