@@ -107,13 +107,26 @@ struct ClipScratch {
     total: Buffer,
 }
 
+impl ClipScratch {
+    fn new(gpu: &Gpu, capacity: u64) -> Result<ClipScratch> {
+        let buf = |name: &str, floats: u64| Buffer::new(gpu, name, floats * 4, crate::gpu::MemoryKind::Device);
+        Ok(ClipScratch {
+            capacity: capacity as u32,
+            update: buf("trust region update", capacity)?,
+            partial: buf("trust region partial sums", capacity.div_ceil(256))?,
+            total: buf("trust region total", 1)?,
+        })
+    }
+}
+
 pub struct Adam {
     gpu: Gpu,
     pipeline: ComputePipeline,
     update: ComputePipeline,
     reduce: ComputePipeline,
     apply: ComputePipeline,
-    scratch: Vec<ClipScratch>,
+    /// Per slot, so tensors clipped in one submission do not share scratch.
+    scratch: Vec<Option<ClipScratch>>,
 }
 
 impl Adam {
@@ -170,27 +183,13 @@ impl Adam {
     ) -> Result<()> {
         let n = moments.len;
         let groups = n.div_ceil(256);
-        while self.scratch.len() <= slot {
-            self.scratch.push(ClipScratch {
-                capacity: 0,
-                update: Buffer::new(&self.gpu, "trust region update", 4, crate::gpu::MemoryKind::Device)?,
-                partial: Buffer::new(&self.gpu, "trust region partial sums", 4, crate::gpu::MemoryKind::Device)?,
-                total: Buffer::new(&self.gpu, "trust region total", 4, crate::gpu::MemoryKind::Device)?,
-            });
+        if self.scratch.len() <= slot {
+            self.scratch.resize_with(slot + 1, || None);
         }
-        if self.scratch[slot].capacity < n {
-            let cap = crate::render::grow(n as u64);
-            let s = &mut self.scratch[slot];
-            s.update = Buffer::new(&self.gpu, "trust region update", cap * 4, crate::gpu::MemoryKind::Device)?;
-            s.partial = Buffer::new(
-                &self.gpu,
-                "trust region partial sums",
-                cap.div_ceil(256) * 4,
-                crate::gpu::MemoryKind::Device,
-            )?;
-            s.capacity = cap as u32;
+        if self.scratch[slot].as_ref().is_none_or(|s| s.capacity < n) {
+            self.scratch[slot] = Some(ClipScratch::new(&self.gpu, crate::render::grow(n as u64))?);
         }
-        let s = &self.scratch[slot];
+        let s = self.scratch[slot].as_ref().unwrap();
         let push = UpdatePush {
             grad: grad.address(),
             m: moments.m.address(),
