@@ -128,10 +128,15 @@ struct TrainArgs {
     /// Highest SH degree (one more band every 1000 iterations).
     #[arg(long, default_value_t = 3)]
     sh_degree: u32,
-    /// Disable adaptive density control (clone / split / prune / opacity reset).
+    /// Disable densification (no clone / split / prune / opacity reset, no MCMC relocation).
     #[arg(long)]
     no_densify: bool,
-    /// Upper bound on the number of Gaussians densification may create.
+    /// Densification strategy: adc = INRIA adaptive density control (clone / split / prune, opacity
+    /// reset); mcmc = 3DGS-MCMC (relocate transparent Gaussians onto opaque ones, grow by 5 % every
+    /// 100 iterations up to --max-gaussians, opacity/scale regularizers and position noise).
+    #[arg(long, value_enum, default_value = "adc")]
+    strategy: cogeo::train::trainer::Strategy,
+    /// Gaussian budget: adc never grows past it; mcmc grows to it.
     #[arg(long, default_value_t = 3_000_000)]
     max_gaussians: usize,
     /// Densify until this iteration (INRIA: 15000; scaled down automatically for short runs).
@@ -373,6 +378,7 @@ fn cmd_train(a: TrainArgs) -> Result<()> {
         // (a reset needs thousands of iterations to recover)
         opacity_reset_interval: 3000,
         max_gaussians: a.max_gaussians,
+        strategy: a.strategy,
         seed: a.seed,
         background: a.background,
         ..Default::default()

@@ -6,6 +6,7 @@
 #include "common.glsl"
 #include "render_params.glsl"
 #include "sh.glsl"
+#include "quat.glsl"
 #include "tile_binning.glsl"
 
 layout(local_size_x = 256) in;
@@ -34,10 +35,7 @@ void main() {
     // 3D covariance R S S^T R^T from the normalized quaternion and exp(log scale)
     vec4 q = vec4(p.quats.v[4 * g], p.quats.v[4 * g + 1], p.quats.v[4 * g + 2], p.quats.v[4 * g + 3]);
     q = q / length(q);
-    float w = q.x, x = q.y, y = q.z, z = q.w;
-    mat3 Rq = mat3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y),
-                   2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x),
-                   2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y));
+    mat3 Rq = quat_to_rotation(q);
     vec3 s = exp(vec3(p.log_scales.v[3 * g], p.log_scales.v[3 * g + 1], p.log_scales.v[3 * g + 2]));
     mat3 M = Rq * mat3(s.x, 0, 0, 0, s.y, 0, 0, 0, s.z);
     mat3 cov_world = M * transpose(M);

@@ -4,4 +4,5 @@ pub mod adam;
 pub mod checkpoint;
 pub mod dataset;
 pub mod loss;
+pub mod mcmc;
 pub mod trainer;

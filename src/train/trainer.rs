@@ -7,6 +7,7 @@
 use super::adam::{Adam, Moments};
 use super::dataset::{Dataset, View};
 use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
+use super::mcmc::{self, McmcPasses, RelocationStats};
 use crate::demo::Rng;
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
@@ -29,8 +30,10 @@ pub struct TrainConfig {
     /// Mean view-space positional gradient (NDC units) above which Gaussians are cloned or split.
     pub grad_threshold: f32,
     pub opacity_reset_interval: u32,
-    /// Densification never grows the scene past this many Gaussians.
+    /// Densification never grows the scene past this many Gaussians (the MCMC strategy grows to it).
     pub max_gaussians: usize,
+    #[serde(default)]
+    pub strategy: Strategy,
     pub seed: u64,
     pub background: [f32; 3],
 }
@@ -47,10 +50,22 @@ impl Default for TrainConfig {
             grad_threshold: 2e-4,
             opacity_reset_interval: 3000,
             max_gaussians: 3_000_000,
+            strategy: Strategy::Adc,
             seed: 0,
             background: [0.0; 3],
         }
     }
+}
+
+/// How the set of Gaussians changes during training.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
+pub enum Strategy {
+    /// INRIA adaptive density control: clone / split / prune and periodic opacity reset.
+    #[default]
+    Adc,
+    /// 3DGS-MCMC: dead Gaussians relocated onto live ones, growth by 5 % up to the budget, opacity
+    /// and scale regularizers, position noise (train/mcmc.rs).
+    Mcmc,
 }
 
 /// Which parameter groups are frozen (no update).
@@ -79,7 +94,7 @@ pub const LR_OPACITY: f32 = 0.025;
 pub const LR_SCALE: f32 = 5e-3;
 pub const LR_ROTATION: f32 = 1e-3;
 
-fn logit(p: f64) -> f32 {
+pub(crate) fn logit(p: f64) -> f32 {
     (p / (1.0 - p)).ln() as f32
 }
 
@@ -168,6 +183,9 @@ pub struct Trainer {
     /// When set, each geometry tensor's (means, scales, rotations) update per step is clipped to
     /// this Euclidean norm (a trust region).
     pub trust_radius: Option<f32>,
+    mcmc: McmcPasses,
+    /// What the last MCMC relocation did.
+    pub last_relocation: RelocationStats,
     pub last_timings: Vec<crate::gpu::PassTiming>,
 }
 
@@ -203,6 +221,8 @@ impl Trainer {
             profile: false,
             frozen: Frozen::default(),
             trust_radius: None,
+            mcmc: McmcPasses::new(gpu)?,
+            last_relocation: RelocationStats::default(),
             last_timings: Vec::new(),
         })
     }
@@ -261,6 +281,12 @@ impl Trainer {
         let m = &self.moments;
         let k = sh_coeffs(s.sh_degree) as u32;
         let f = self.frozen;
+        let mcmc = self.cfg.strategy == Strategy::Mcmc;
+        if mcmc {
+            let w_o = if f.opacity { 0.0 } else { mcmc::OPACITY_REG };
+            let w_s = if f.log_scales { 0.0 } else { mcmc::SCALE_REG };
+            self.mcmc.record_regularize(&mut rec, s, g, (w_o, w_s));
+        }
         let geometry = [
             (f.means, &s.means, &g.means, &m.means, self.position_lr()),
             (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE),
@@ -282,6 +308,11 @@ impl Trainer {
             self.adam.record_split(&mut rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
         }
         rec.mark("adam");
+        if mcmc && !f.means {
+            let seed = (self.cfg.seed as u32).wrapping_mul(0x9e37_79b9) ^ self.step;
+            self.mcmc.record_noise(&mut rec, s, mcmc::NOISE_LR * self.position_lr(), seed);
+            rec.mark("mcmc noise");
+        }
         let mut timings = frame.timings;
         timings.extend(rec.submit_and_wait()?);
         self.last_timings = timings;
@@ -291,9 +322,12 @@ impl Trainer {
         }
         if self.cfg.densify && self.step <= self.cfg.densify_until {
             if self.step >= self.cfg.densify_from && self.step % self.cfg.densify_interval == 0 {
-                self.densify()?;
+                match self.cfg.strategy {
+                    Strategy::Adc => self.densify()?,
+                    Strategy::Mcmc => self.relocate()?,
+                }
             }
-            if self.step % self.cfg.opacity_reset_interval == 0 {
+            if self.cfg.strategy == Strategy::Adc && self.step % self.cfg.opacity_reset_interval == 0 {
                 self.reset_opacity()?;
             }
         }
@@ -420,6 +454,14 @@ impl Trainer {
         if out.is_empty() {
             bail!("densification pruned every Gaussian (step {})", self.step);
         }
+        self.replace_scene(&out, &keep)
+    }
+
+    /// MCMC step: relocate dead Gaussians and grow towards the budget (train/mcmc.rs).
+    fn relocate(&mut self) -> Result<()> {
+        let scene = self.download_scene()?;
+        let (out, keep, stats) = mcmc::relocate_and_grow(&scene, self.cfg.max_gaussians, &mut self.rng)?;
+        self.last_relocation = stats;
         self.replace_scene(&out, &keep)
     }
 
