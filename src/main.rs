@@ -40,6 +40,9 @@ enum Command {
     Synth(SynthArgs),
     /// Train a Gaussian scene from a COLMAP capture (sparse model + images).
     Train(TrainArgs),
+    /// Give every Gaussian an object label from per-view masks (identity features, voting, or the
+    /// 2D-projection baseline); writes the tagged PLY and a JSON sidecar.
+    Tag(TagArgs),
 }
 
 #[derive(Args)]
@@ -65,6 +68,10 @@ struct RenderArgs {
     /// Also blend the scene's identity features (PLY properties f_obj_0..) into `<name>_features.exr`.
     #[arg(long)]
     features: bool,
+    /// Also render the per-Gaussian `label` property (from `cogeo tag`) as a colorized label map
+    /// `<name>_labels.png` (each pixel: the label with the largest blending weight; dark gray = 0).
+    #[arg(long)]
+    labels: bool,
     /// Output width; intrinsics are scaled. With only one of --width/--height the aspect ratio is kept.
     #[arg(long)]
     width: Option<u32>,
@@ -146,6 +153,53 @@ struct TrainArgs {
     #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
     background: [f32; 3],
     /// Random seed (view order, splits).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+#[derive(Args)]
+struct TagArgs {
+    /// Trained scene (INRIA PLY), e.g. the scene.ply of `cogeo train`. Not modified.
+    #[arg(long)]
+    scene: PathBuf,
+    /// Dataset folder the scene was trained from (COLMAP model + images; cameras and the split).
+    #[arg(long)]
+    data: PathBuf,
+    /// Image folder inside --data (e.g. images_2); masks are resized to its images if needed.
+    #[arg(long, default_value = "images")]
+    images: String,
+    /// Masks: a folder of 8-bit instance maps named like the images (pixel value q = object q,
+    /// 0 = background, 255 = ignore), or a folder of per-object subfolders holding binary masks
+    /// (nonzero = object; objects numbered 1.. in sorted subfolder order). Relative paths are tried
+    /// against the current directory, then inside --data.
+    #[arg(long)]
+    masks: PathBuf,
+    /// distill: identity features + classifier (cross-entropy + kNN KL); vote: closed-form blending
+    /// weight vote; project: label under each Gaussian's projected center (naive baseline).
+    #[arg(long, value_enum, default_value = "distill")]
+    method: cogeo::tag::Method,
+    /// Output tagged PLY (properties f_obj_* for distill, label, label_prob); the sidecar
+    /// `<out>.json` holds the classifier and the report.
+    #[arg(long)]
+    out: PathBuf,
+    /// Distillation iterations (one training view each).
+    #[arg(long, default_value_t = 1000)]
+    iters: u32,
+    /// Identity feature dimension D (1..32).
+    #[arg(long, default_value_t = 16)]
+    dim: usize,
+    /// Weight lambda of the kNN KL spatial loss (0 disables it).
+    #[arg(long, default_value_t = 0.1)]
+    lambda: f32,
+    /// Neighbours k of the spatial loss.
+    #[arg(long, default_value_t = 5)]
+    knn: usize,
+    /// Vote: an object label needs a vote share at least this much above the background's.
+    #[arg(long, default_value_t = 0.0)]
+    margin: f32,
+    /// Random seed (feature and classifier initialization, view order, KL samples).
     #[arg(long, default_value_t = 0)]
     seed: u64,
     #[command(flatten)]
@@ -300,6 +354,13 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     if !(a.near > 0.0) {
         bail!("--near must be positive");
     }
+    let labels = if a.labels {
+        Some(cogeo::tag::scene_labels(&scene).ok_or_else(|| {
+            anyhow!("{}: --labels needs a `label` property in the scene (run `cogeo tag` first)", a.scene.display())
+        })?)
+    } else {
+        None
+    };
     let gpu = open_gpu(&a.device)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
     let settings = RenderSettings {
@@ -310,6 +371,20 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         timestamps: a.timings,
     };
     render_views(&gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings)?;
+    if let Some(labels) = &labels {
+        let mut renderer = cogeo::tag::LabelRenderer::new(&gpu, &scene, labels)?;
+        for cam in &cameras {
+            let map = renderer.render(cam)?;
+            let rgb: Vec<u8> = map.iter().flat_map(|&l| cogeo::tag::labels::label_color(l)).collect();
+            cogeo::io::write_png(
+                &a.out.join(format!("{}_labels.png", cam.name)),
+                cam.width,
+                cam.height,
+                image::ColorType::Rgb8,
+                &rgb,
+            )?;
+        }
+    }
     eprintln!("wrote {} view(s) to {}", cameras.len(), a.out.display());
     Ok(())
 }
@@ -332,6 +407,105 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
         scene.len(),
         cameras.len(),
         a.out.display()
+    );
+    Ok(())
+}
+
+fn cmd_tag(a: TagArgs) -> Result<()> {
+    use cogeo::tag::{self, distill::DistillConfig, labels, Method};
+    let scene = load_scene(&a.scene)?;
+    if a.dim == 0 || a.dim > tag::distill::MAX_DIM {
+        bail!("--dim must be 1..={}", tag::distill::MAX_DIM);
+    }
+    if a.method == Method::Distill && (a.iters == 0 || a.knn == 0) {
+        bail!("--iters and --knn must be positive");
+    }
+    if a.out.extension().and_then(|e| e.to_str()) != Some("ply") {
+        bail!("{}: --out must name a .ply file", a.out.display());
+    }
+    let data = cogeo::train::dataset::load(&a.data, &a.images)?;
+    for w in &data.warnings {
+        eprintln!("warning: {w}");
+    }
+    let masks = if a.masks.is_dir() || a.masks.is_absolute() { a.masks.clone() } else { a.data.join(&a.masks) };
+    let train_cams: Vec<&Camera> = data.train.iter().map(|v| &v.camera).collect();
+    let maps = labels::load(&masks, &train_cams)?;
+    eprintln!(
+        "tagging {} Gaussians with {} object label(s) from {} views ({})",
+        scene.len(),
+        maps.num_objects,
+        train_cams.len(),
+        masks.display()
+    );
+    let gpu = open_gpu(&a.device)?;
+    let opts = tag::TagOptions {
+        method: a.method,
+        distill: DistillConfig {
+            dim: a.dim,
+            iters: a.iters,
+            lambda: a.lambda,
+            knn: a.knn,
+            seed: a.seed,
+            ..Default::default()
+        },
+        margin: a.margin,
+    };
+    let bar = ProgressBar::new(if a.method == Method::Distill { a.iters as u64 } else { 0 });
+    bar.set_style(
+        ProgressStyle::with_template("tag [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {msg}")
+            .unwrap()
+            .progress_chars("=> "),
+    );
+    let start = std::time::Instant::now();
+    let cameras: Vec<Camera> = train_cams.iter().map(|c| (*c).clone()).collect();
+    let tagged = tag::tag_scene(&gpu, &scene, &cameras, &maps, &opts, |it, losses| {
+        bar.set_position(it as u64);
+        if let Some((o, s)) = losses {
+            bar.set_message(format!("L_obj {o:.4} L_space {s:.5}"));
+        }
+    })?;
+    bar.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
+    let counts: Vec<usize> =
+        (0..maps.classes()).map(|q| tagged.tags.labels.iter().filter(|&&l| l as usize == q).count()).collect();
+    // held-out evaluation where masks for the test views exist
+    let test_cams: Vec<&Camera> = data.test.iter().map(|v| &v.camera).collect();
+    let held_out = match labels::load(&masks, &test_cams) {
+        Ok(truth) if !test_cams.is_empty() => {
+            let cams: Vec<Camera> = test_cams.iter().map(|c| (*c).clone()).collect();
+            let (per, mean) = tag::evaluate_labels(&gpu, &scene, &tagged.tags.labels, &cams, &truth)?;
+            Some(serde_json::json!({ "views": cams.len(), "miou": mean, "iou_per_label": per }))
+        }
+        _ => None,
+    };
+    let mut out_scene = scene.clone();
+    tag::attach(&mut out_scene, &tagged.tags, tagged.features.as_ref().map(|(f, d)| (f.as_slice(), *d)));
+    let report = serde_json::json!({
+        "method": a.method,
+        "scene": a.scene,
+        "masks": masks,
+        "labels": maps.num_objects,
+        "names": maps.names,
+        "gaussians_per_label": counts,
+        "seconds": seconds,
+        "final_losses": tagged.losses.map(|(o, s)| serde_json::json!({"obj": o, "space": s})),
+        "classifier": tagged.classifier,
+        "held_out": held_out,
+    });
+    ply::write_ply(&out_scene, &a.out)?;
+    let sidecar = a.out.with_extension("json");
+    cogeo::io::write_atomic(&sidecar, |w| {
+        serde_json::to_writer_pretty(&mut *w, &report)?;
+        Ok(())
+    })?;
+    let miou = held_out
+        .as_ref()
+        .map(|h| format!("; held-out mIoU {:.3}", h["miou"].as_f64().unwrap_or(0.0)))
+        .unwrap_or_default();
+    eprintln!(
+        "done in {seconds:.1} s: Gaussians per label {counts:?}{miou}; wrote {} and {}",
+        a.out.display(),
+        sidecar.display()
     );
     Ok(())
 }
@@ -477,6 +651,7 @@ fn main() {
         Command::Demo(a) => cmd_demo(a),
         Command::Synth(a) => cmd_synth(a),
         Command::Train(a) => cmd_train(a),
+        Command::Tag(a) => cmd_tag(a),
     };
     if let Err(e) = result {
         // one line: the error and its causes

@@ -7,6 +7,7 @@
 // (seed, i), so the pass is deterministic for a given step.
 #include "common.glsl"
 #include "quat.glsl"
+#include "hash.glsl"
 
 layout(local_size_x = 256) in;
 layout(push_constant) uniform Push {
@@ -19,15 +20,9 @@ layout(push_constant) uniform Push {
     uint seed;
 };
 
-uint pcg(uint v) {
-    uint state = v * 747796405u + 2891336453u;
-    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-
 // uniform in (0, 1]
 float unit(inout uint s) {
-    s = pcg(s);
+    s = pcg_hash(s);
     return (float(s >> 8) + 1.0) / 16777216.0;
 }
 
@@ -37,7 +32,7 @@ void main() {
     float sig = 1.0 / (1.0 + exp(-opacity_logits.v[i]));
     float gate = 1.0 / (1.0 + exp(100.0 * (sig - 0.005)));
     if (gate < 1e-12) return;
-    uint s = pcg(seed ^ pcg(i));
+    uint s = pcg_hash(seed ^ pcg_hash(i));
     // Box-Muller: three normals from two pairs
     float r0 = sqrt(-2.0 * log(unit(s))), t0 = 6.283185307 * unit(s);
     float r1 = sqrt(-2.0 * log(unit(s))), t1 = 6.283185307 * unit(s);

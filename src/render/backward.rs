@@ -73,7 +73,21 @@ pub struct SceneGradients {
 
 impl SceneGradients {
     pub fn new(gpu: &Gpu, scene: &SceneBuffers) -> Result<SceneGradients> {
-        let n = scene.num_gaussians as u64;
+        Self::with_rows(gpu, scene, scene.num_gaussians as u64)
+    }
+
+    /// Gradients for the features-only backward (`Backward::record` with `features_only`), which
+    /// never touches the geometry and color groups: those get one element instead of N rows, so
+    /// feature training on millions of Gaussians does not allocate SH-sized gradient buffers.
+    pub fn for_features(gpu: &Gpu, scene: &SceneBuffers) -> Result<SceneGradients> {
+        anyhow::ensure!(scene.feature_dim > 0, "the scene has no features to train");
+        let mut g = Self::with_rows(gpu, scene, 1)?;
+        g.features =
+            Some(Buffer::zeroed(gpu, "grad features", scene.num_gaussians as u64 * scene.feature_dim as u64 * 4)?);
+        Ok(g)
+    }
+
+    fn with_rows(gpu: &Gpu, scene: &SceneBuffers, n: u64) -> Result<SceneGradients> {
         let k = ((scene.sh_degree + 1) * (scene.sh_degree + 1)) as u64;
         let buf = |name: &str, per: u64| Buffer::zeroed(gpu, name, n * per * 4);
         Ok(SceneGradients {

@@ -1,11 +1,7 @@
 // Parameters of the backward passes; mirrors `render::backward::BackwardParams` (std430, pointers first).
 // Gradient accumulators are `GradBuf`: Floats updated with float atomics, or Uints updated with a
 // compare-and-swap loop on devices without VK_EXT_shader_atomic_float (the *_cas shader variants).
-#ifdef NO_FLOAT_ATOMICS
-#define GradBuf Uints
-#else
-#define GradBuf Floats
-#endif
+#include "grad_add.glsl"
 
 layout(buffer_reference, std430, buffer_reference_align = 8) buffer BackwardParams {
     // upstream gradients dL/d(output), planar like the forward outputs (width * height per plane)
@@ -36,33 +32,3 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer BackwardPara
     uint pad0;
     uint pad1;
 };
-
-void grad_add(GradBuf buf, uint index, float value) {
-#ifdef NO_FLOAT_ATOMICS
-    uint old = buf.v[index];
-    for (;;) {
-        uint desired = floatBitsToUint(uintBitsToFloat(old) + value);
-        uint seen = atomicCompSwap(buf.v[index], old, desired);
-        if (seen == old) break;
-        old = seen;
-    }
-#else
-    atomicAdd(buf.v[index], value);
-#endif
-}
-
-float grad_read(GradBuf buf, uint index) {
-#ifdef NO_FLOAT_ATOMICS
-    return uintBitsToFloat(buf.v[index]);
-#else
-    return buf.v[index];
-#endif
-}
-
-void grad_clear(GradBuf buf, uint index) {
-#ifdef NO_FLOAT_ATOMICS
-    buf.v[index] = 0u;
-#else
-    buf.v[index] = 0.0;
-#endif
-}

@@ -1,0 +1,3 @@
+#version 460
+// tag_cross_entropy with float atomics.
+#include "tag_cross_entropy_main.glsl"
