@@ -20,6 +20,7 @@ const uint CHANNELS = 32;
 shared vec2 s_xy[BATCH];
 shared vec4 s_conic_opacity[BATCH];
 shared uint s_gauss[BATCH];
+shared uint s_any_alive;
 
 void main() {
     uint tile = tile_id();
@@ -39,7 +40,12 @@ void main() {
     float T = 1.0;
     bool finished = !inside;
     for (uint batch = start; batch < end; batch += BATCH) {
+        // stop once every pixel of the tile has saturated, as the forward pass does: long tile
+        // lists behind opaque surfaces would otherwise be walked to the end
         barrier();
+        if (local == 0) s_any_alive = 0;
+        barrier();
+        if (!finished) atomicOr(s_any_alive, 1u);
         uint idx = batch + local;
         if (idx < end) {
             uint g = p.isect_gauss.v[idx];
@@ -49,6 +55,7 @@ void main() {
                                           p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
         }
         barrier();
+        if (s_any_alive == 0) break;
         uint count = min(BATCH, end - batch);
         for (uint j = 0; j < count; j++) {
             float w = finished ? 0.0 : blend_weight(pixel, s_xy[j], s_conic_opacity[j], T, finished);
