@@ -1,8 +1,10 @@
 //! The training loop: per iteration one training view is rendered (forward passes), the photometric
 //! loss and its gradient are computed, the backward passes accumulate parameter gradients and Adam
 //! updates every parameter group with its INRIA learning rate (conventions.md). SH degree grows by one
-//! every 1000 iterations. Densification (clone / split / prune, opacity reset) runs on the host every
-//! 100 iterations, carrying the Adam moments of surviving Gaussians.
+//! every 1000 iterations. Densification runs on the host every 100 iterations, carrying the Adam
+//! moments of surviving Gaussians: INRIA clone / split / prune with opacity resets (`Strategy::Adc`),
+//! or 3DGS-MCMC relocation and growth to the budget (`Strategy::Mcmc`, train/mcmc.rs, which also adds
+//! a regularizer pass before Adam and a noise pass after it).
 
 use super::adam::{Adam, Moments};
 use super::dataset::{Dataset, View};
