@@ -148,16 +148,7 @@ fn mcmc_training_reaches_the_budget_and_psnr() {
     let dir = std::env::temp_dir().join(format!("cogeo-mcmc-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let (data, out) = (dir.join("data"), dir.join("out"));
-    let run = |args: &[&str]| {
-        let output = std::process::Command::new(env!("CARGO_BIN_EXE_cogeo"))
-            .env("COGEO_VALIDATE", std::env::var("COGEO_VALIDATE").unwrap_or_else(|_| "1".into()))
-            .args(args)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&output.stderr).to_string();
-        assert!(output.status.success(), "{args:?} failed:\n{stderr}");
-        assert!(!stderr.contains("vulkan validation:"), "validation messages:\n{stderr}");
-    };
+    let run = |args: &[&str]| common::run_cogeo(env!("CARGO_BIN_EXE_cogeo"), args);
     let d = data.to_str().unwrap();
     run(&[
         "synth",

@@ -223,16 +223,7 @@ fn knn_kl_value_and_gradients_match_cpu() {
 fn tag_methods_on_a_trained_synth_scene_reach_miou() {
     let dir = std::env::temp_dir().join(format!("cogeo-tag-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let run = |args: &[&str]| {
-        let output = std::process::Command::new(env!("CARGO_BIN_EXE_cogeo"))
-            .env("COGEO_VALIDATE", std::env::var("COGEO_VALIDATE").unwrap_or_else(|_| "1".into()))
-            .args(args)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&output.stderr).to_string();
-        assert!(output.status.success(), "{args:?} failed:\n{stderr}");
-        assert!(!stderr.contains("vulkan validation:"), "validation messages:\n{stderr}");
-    };
+    let run = |args: &[&str]| common::run_cogeo(env!("CARGO_BIN_EXE_cogeo"), args);
     let path = |p: &str| dir.join(p).to_str().unwrap().to_string();
     let (data, trained) = (path("data"), path("trained"));
     run(&[

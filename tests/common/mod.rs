@@ -135,3 +135,17 @@ pub fn random_features(seed: u64, n: usize, d: usize) -> Vec<f32> {
     let mut rng = Rng::new(seed);
     (0..n * d).map(|_| rng.normal() as f32).collect()
 }
+
+/// Runs the cogeo binary `exe` (the test's `env!("CARGO_BIN_EXE_cogeo")`) with `args`, validation on
+/// unless COGEO_VALIDATE=0; asserts success and no validation messages, and returns its stderr.
+pub fn run_cogeo(exe: &str, args: &[&str]) -> String {
+    let output = std::process::Command::new(exe)
+        .env("COGEO_VALIDATE", std::env::var("COGEO_VALIDATE").unwrap_or_else(|_| "1".into()))
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr).to_string();
+    assert!(output.status.success(), "{args:?} failed:\n{stderr}");
+    assert!(!stderr.contains("vulkan validation:"), "validation messages:\n{stderr}");
+    stderr
+}
