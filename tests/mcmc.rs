@@ -10,7 +10,7 @@ use cogeo::render::SceneBuffers;
 use cogeo::scene::camera::rotation_from_qvec;
 use cogeo::scene::GaussianScene;
 use cogeo::train::mcmc::McmcPasses;
-use common::{gpu, logit};
+use common::{finite_differences, gpu, logit};
 
 fn scene_of(
     n: usize,
@@ -61,29 +61,13 @@ fn regularizer_gradient_matches_finite_differences() {
     let mut o: Vec<f64> = scene.opacity_logits.iter().map(|&x| x as f64).collect();
     let mut s: Vec<f64> = scene.log_scales.iter().flatten().map(|&x| x as f64).collect();
     let h = 1e-4;
-    let mut worst = 0.0f64;
-    for i in 0..n {
-        let x = o[i];
-        o[i] = x + h;
-        let up = loss(&o, &s);
-        o[i] = x - h;
-        let down = loss(&o, &s);
-        o[i] = x;
-        let fd = (up - down) / (2.0 * h);
-        let gpu_reg = g_o[i] as f64 - prior_o[i] as f64;
-        worst = worst.max((gpu_reg - fd).abs() / fd.abs().max(1e-9));
-    }
-    for j in 0..3 * n {
-        let x = s[j];
-        s[j] = x + h;
-        let up = loss(&o, &s);
-        s[j] = x - h;
-        let down = loss(&o, &s);
-        s[j] = x;
-        let fd = (up - down) / (2.0 * h);
-        let gpu_reg = g_s[j] as f64 - prior_s[j] as f64;
-        worst = worst.max((gpu_reg - fd).abs() / fd.abs().max(1e-9));
-    }
+    let s_fixed = s.clone();
+    let fd_o = finite_differences(&mut o, 0..n, h, |o| loss(o, &s_fixed));
+    let o_fixed = o.clone();
+    let fd_s = finite_differences(&mut s, 0..3 * n, h, |s| loss(&o_fixed, s));
+    let gpu_reg = g_o.iter().zip(&prior_o).chain(g_s.iter().zip(&prior_s)).map(|(&g, &p)| g as f64 - p as f64);
+    let worst =
+        gpu_reg.zip(fd_o.iter().chain(&fd_s)).fold(0.0f64, |w, (g, &fd)| w.max((g - fd).abs() / fd.abs().max(1e-9)));
     println!("regularizer gradient: worst relative error {worst:.2e}");
     // the prior gradients (1e-3) dwarf the regularizer (1e-5 .. 1e-8), so float32 cancellation
     // bounds the achievable relative error of the difference

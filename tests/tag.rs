@@ -7,7 +7,7 @@ mod common;
 use cogeo::demo::Rng;
 use cogeo::gpu::{Buffer, Recorder};
 use cogeo::tag::distill::{nearest_neighbors, Classifier, CrossEntropyArgs, KnnKlArgs, TagLosses};
-use common::gpu;
+use common::{finite_differences, gpu};
 
 const DIM: usize = 16;
 const CLASSES: usize = 5;
@@ -34,21 +34,6 @@ fn rel_err(gpu: &[f32], cpu: &[f64]) -> f64 {
     let num: f64 = gpu.iter().zip(cpu).map(|(&g, &c)| (g as f64 - c).powi(2)).sum();
     let den: f64 = cpu.iter().map(|c| c * c).sum();
     (num / den.max(1e-300)).sqrt()
-}
-
-/// Central differences of `f` at `x` for every coordinate in `which`.
-fn finite_differences(x: &mut [f64], which: std::ops::Range<usize>, h: f64, f: impl Fn(&[f64]) -> f64) -> Vec<f64> {
-    which
-        .map(|i| {
-            let v = x[i];
-            x[i] = v + h;
-            let up = f(x);
-            x[i] = v - h;
-            let down = f(x);
-            x[i] = v;
-            (up - down) / (2.0 * h)
-        })
-        .collect()
 }
 
 #[test]

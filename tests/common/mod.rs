@@ -149,3 +149,18 @@ pub fn run_cogeo(exe: &str, args: &[&str]) -> String {
     assert!(!stderr.contains("vulkan validation:"), "validation messages:\n{stderr}");
     stderr
 }
+
+/// Central differences of `f` at `x` for every coordinate in `which`.
+pub fn finite_differences(x: &mut [f64], which: std::ops::Range<usize>, h: f64, f: impl Fn(&[f64]) -> f64) -> Vec<f64> {
+    which
+        .map(|i| {
+            let v = x[i];
+            x[i] = v + h;
+            let up = f(x);
+            x[i] = v - h;
+            let down = f(x);
+            x[i] = v;
+            (up - down) / (2.0 * h)
+        })
+        .collect()
+}
