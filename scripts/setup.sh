@@ -43,3 +43,37 @@ if [ ! -f "$out/libshaderc_combined.a" ]; then
   mv "$out/libshaderc_combined.a.tmp" "$out/libshaderc_combined.a"
   echo "setup: merged shaderc static archives into $out/libshaderc_combined.a" >&2
 fi
+
+# onnxruntime for the optional ONNX models (inpainting, depth, denoiser; tests use tiny models they
+# build): the shared library of the PyPI wheel, unpacked where cogeo looks for it by default
+# (src/onnx.rs). ORT_DYLIB_PATH overrides that location.
+ort_version=1.31.1
+ort_dir="${XDG_CACHE_HOME:-$HOME/.cache}/cogeo/onnxruntime"
+if [ ! -f "$ort_dir/libonnxruntime.so.$ort_version" ]; then
+  if ! python3 -m pip --version >/dev/null 2>&1; then
+    echo "setup: installing python3-pip (to fetch the onnxruntime wheel)" >&2
+    sudo_cmd=""
+    [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+    $sudo_cmd apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends python3-pip >&2
+  fi
+  tmp="$(mktemp -d)"
+  python3 -m pip download --quiet --no-deps --only-binary=:all: --platform "manylinux_2_28_$(uname -m)" \
+    --python-version 3.11 "onnxruntime==$ort_version" -d "$tmp" >&2
+  mkdir -p "$ort_dir"
+  python3 - "$tmp" "$ort_dir" "$ort_version" <<'PY'
+import glob, os, sys, zipfile
+tmp, out, version = sys.argv[1:4]
+wheel = glob.glob(os.path.join(tmp, "onnxruntime-*.whl"))[0]
+with zipfile.ZipFile(wheel) as z:
+    for name in z.namelist():
+        base = os.path.basename(name)
+        if base in (f"libonnxruntime.so.{version}", "libonnxruntime_providers_shared.so"):
+            dest = os.path.join(out, base)
+            with z.open(name) as src, open(dest + ".tmp", "wb") as dst:
+                dst.write(src.read())
+            os.replace(dest + ".tmp", dest)
+PY
+  rm -rf "$tmp"
+  echo "setup: installed onnxruntime $ort_version into $ort_dir" >&2
+fi

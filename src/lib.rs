@@ -2,11 +2,19 @@
 //!
 //! Modules map onto the pipeline: `gpu` (device, memory, pipelines), `render` (forward passes and
 //! their CPU reference), `scene` (Gaussians, PLY, cameras), `train` (optimization), `tag` (object labels per Gaussian),
-//! `demo` (the built-in default scene).
+//! then removal: `remove` (selection, hole masks, the pipeline), `complete` (inpainting and depth),
+//! `fuse` (new Gaussians, pruning), `refine` (trust-region refinement), `eval` (metrics), `onnx`
+//! (user-supplied models); `demo` (the built-in default scene).
 
+pub mod complete;
 pub mod demo;
+pub mod eval;
+pub mod fuse;
 pub mod gpu;
 pub mod io;
+pub mod onnx;
+pub mod refine;
+pub mod remove;
 pub mod render;
 pub mod scene;
 pub mod synth;

@@ -43,6 +43,11 @@ enum Command {
     /// Give every Gaussian an object label from per-view masks (identity features, voting, or the
     /// 2D-projection baseline); writes the tagged PLY and a JSON sidecar.
     Tag(TagArgs),
+    /// Remove the objects of chosen labels from a tagged scene and complete the background behind
+    /// them (hole masks, inpainting, depth completion, fusion, pruning, refinement).
+    Remove(RemoveArgs),
+    /// The whole path from a capture: train, tag, remove, in one command.
+    Run(RunArgs),
 }
 
 #[derive(Args)]
@@ -202,6 +207,139 @@ struct TagArgs {
     /// Random seed (feature and classifier initialization, view order, KL samples).
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+#[derive(Args, Clone)]
+struct RemovalFlags {
+    /// Labels to remove, comma-separated (as in the tagged scene's `label` property).
+    #[arg(long, value_delimiter = ',', required_unless_present = "prompt")]
+    labels: Vec<u8>,
+    /// Object names to remove, comma-separated, looked up in the tagging sidecar's names
+    /// (`<scene>.json` of `cogeo tag`: mask subfolder names, or "object q").
+    #[arg(long, value_delimiter = ',')]
+    prompt: Vec<String>,
+    /// ONNX inpainting model with the LaMa contract (image [1,3,512,512] in [0,1] and mask
+    /// [1,1,512,512], 1 = hole, in; RGB out). Default: the built-in harmonic inpainter.
+    #[arg(long)]
+    inpaint_model: Option<PathBuf>,
+    /// ONNX monocular depth model (see --depth-contract). Default: the built-in prior (harmonic
+    /// completion of the rendered inverse depth from the hole boundary).
+    #[arg(long)]
+    depth_model: Option<PathBuf>,
+    /// Contract of --depth-model: depth-anything-v2 (ImageNet-normalized RGB, sides multiples of 14,
+    /// affine-invariant disparity out) or depth-anything3 (504x504 in, depth out).
+    #[arg(long, value_enum, default_value = "depth-anything-v2")]
+    depth_contract: cogeo::complete::depth::DepthContract,
+    /// ONNX depth-inpainting denoiser run as a masked DDIM loop (inputs sample, timestep, alpha_bar,
+    /// image, mask; output the predicted noise). Default: built-in edge-aware refinement.
+    #[arg(long)]
+    depth_refiner: Option<PathBuf>,
+    /// DDIM steps of --depth-refiner.
+    #[arg(long, default_value_t = 20)]
+    diffusion_steps: usize,
+    /// Ablation: no depth prior; new Gaussians are placed at the depth rendered after removal.
+    #[arg(long)]
+    no_depth_guidance: bool,
+    /// Ablation: only delete the Gaussians (no inpainting, no new Gaussians, no refinement).
+    #[arg(long)]
+    removal_only: bool,
+    /// Skip the refinement stage.
+    #[arg(long)]
+    no_refine: bool,
+    /// Skip pruning of sparse background Gaussians near the patch.
+    #[arg(long)]
+    no_prune: bool,
+    /// Refinement iterations (the first half with geometry frozen).
+    #[arg(long, default_value_t = 150)]
+    refine_iters: u32,
+    /// Trust region: per-step update norm bound of each geometry tensor in the second half.
+    #[arg(long, default_value_t = 0.01)]
+    trust_radius: f32,
+    /// A pixel is in the hole when the removed Gaussians carry more than this share of its weight.
+    #[arg(long, default_value_t = 0.3)]
+    hole_threshold: f32,
+    /// Hole dilation in pixels.
+    #[arg(long, default_value_t = 2.0)]
+    dilate: f32,
+    /// Hole pixels the remaining Gaussians already cover with at least this alpha keep their render
+    /// (background seen from other views); 1 inpaints the whole hole.
+    #[arg(long, default_value_t = 0.9)]
+    keep_alpha: f32,
+    /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.
+    #[arg(long, default_value_t = 4.0)]
+    soft_radius: f32,
+    /// Sample every Nth hole pixel in x and y for new Gaussians.
+    #[arg(long, default_value_t = 1)]
+    stride: usize,
+    /// Pruning: distance to the nearest patch Gaussian that makes a background Gaussian a candidate
+    /// (scene units; default twice the patch spacing).
+    #[arg(long)]
+    prune_near: Option<f64>,
+    /// Pruning: neighbourhood radius of the density test (default three times the patch spacing).
+    #[arg(long)]
+    prune_radius: Option<f64>,
+    /// Pruning: candidates with fewer background neighbours within the radius are pruned.
+    #[arg(long, default_value_t = 4)]
+    prune_min_neighbours: usize,
+    /// Background color r,g,b in [0, 1] (the one the scene was trained with).
+    #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
+    background: [f32; 3],
+    /// Random seed (refinement view order, diffusion noise).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+}
+
+#[derive(Args)]
+struct RemoveArgs {
+    /// Tagged scene (`cogeo tag` output, with a `label` property). Not modified.
+    #[arg(long)]
+    scene: PathBuf,
+    /// Dataset folder the scene was trained from: its training views are edited, its held-out views
+    /// rendered (and scored against gt_background/ when it is a `cogeo synth` dataset).
+    #[arg(long)]
+    data: PathBuf,
+    /// Image folder inside --data.
+    #[arg(long, default_value = "images")]
+    images: String,
+    /// Output folder: scene.ply, report.json, before/ after/ removed/ inpainted/ mask/ depth/.
+    #[arg(long)]
+    out: PathBuf,
+    #[command(flatten)]
+    removal: RemovalFlags,
+    #[command(flatten)]
+    device: DeviceArgs,
+}
+
+#[derive(Args)]
+struct RunArgs {
+    /// Dataset folder: COLMAP model and images.
+    #[arg(long)]
+    data: PathBuf,
+    /// Masks for tagging (see `cogeo tag --masks`).
+    #[arg(long)]
+    masks: PathBuf,
+    /// Image folder inside --data.
+    #[arg(long, default_value = "images")]
+    images: String,
+    /// Output folder: train/, tagged.ply (+ .json), removal/.
+    #[arg(long)]
+    out: PathBuf,
+    /// Training iterations.
+    #[arg(long, default_value_t = 30_000)]
+    iters: u32,
+    /// Highest SH degree of training.
+    #[arg(long, default_value_t = 3)]
+    sh_degree: u32,
+    /// Tagging method.
+    #[arg(long, value_enum, default_value = "distill")]
+    tag_method: cogeo::tag::Method,
+    /// Distillation iterations.
+    #[arg(long, default_value_t = 1000)]
+    tag_iters: u32,
+    #[command(flatten)]
+    removal: RemovalFlags,
     #[command(flatten)]
     device: DeviceArgs,
 }
@@ -636,6 +774,245 @@ fn cmd_train(a: TrainArgs) -> Result<()> {
     Ok(())
 }
 
+/// The labels named by --labels and --prompt.
+fn chosen_labels(flags: &RemovalFlags, scene_path: &Path) -> Result<Vec<u8>> {
+    let mut labels = flags.labels.clone();
+    if !flags.prompt.is_empty() {
+        let sidecar = scene_path.with_extension("json");
+        let text = std::fs::read_to_string(&sidecar)
+            .with_context(|| format!("{}: --prompt needs the tagging sidecar", sidecar.display()))?;
+        let report: serde_json::Value =
+            serde_json::from_str(&text).with_context(|| format!("{}: not valid JSON", sidecar.display()))?;
+        let names: Vec<String> = report["names"]
+            .as_array()
+            .map(|a| a.iter().filter_map(|v| v.as_str().map(str::to_lowercase)).collect())
+            .unwrap_or_default();
+        for p in &flags.prompt {
+            let q = names
+                .iter()
+                .position(|n| *n == p.to_lowercase())
+                .ok_or_else(|| anyhow!("{}: no object named {p:?} (names: {names:?})", sidecar.display()))?;
+            labels.push(q as u8 + 1);
+        }
+    }
+    if labels.contains(&0) {
+        bail!("label 0 is the background and cannot be removed");
+    }
+    labels.sort();
+    labels.dedup();
+    Ok(labels)
+}
+
+fn write_views(dir: &Path, cameras: &[Camera], images: &[Vec<f32>]) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    for (c, img) in cameras.iter().zip(images) {
+        write_png_rgb(&dir.join(format!("{}.png", c.name)), c.width, c.height, img)?;
+    }
+    Ok(())
+}
+
+fn cmd_remove(a: RemoveArgs) -> Result<()> {
+    use cogeo::complete::{depth::DepthPrior, diffusion::OnnxDenoiser, inpaint::Inpainter, Completer};
+    let f = &a.removal;
+    let labels = chosen_labels(f, &a.scene)?;
+    let scene = load_scene(&a.scene)?;
+    let scene_labels = cogeo::tag::scene_labels(&scene).ok_or_else(|| {
+        anyhow!("{}: the scene has no `label` property; tag it first with `cogeo tag`", a.scene.display())
+    })?;
+    let data = cogeo::train::dataset::load(&a.data, &a.images)?;
+    // load models before any GPU work so a bad model path fails at once
+    let mut completer = Completer {
+        inpainter: match &f.inpaint_model {
+            Some(p) => Inpainter::onnx(p)?,
+            None => Inpainter::BuiltIn,
+        },
+        prior: match &f.depth_model {
+            Some(p) => DepthPrior::onnx(p, f.depth_contract)?,
+            None => DepthPrior::BuiltIn,
+        },
+        refiner: f.depth_refiner.as_deref().map(OnnxDenoiser::load).transpose()?,
+        soft_radius: f.soft_radius,
+        refine_sweeps: 60,
+        diffusion_steps: f.diffusion_steps,
+        depth_guidance: !f.no_depth_guidance,
+        seed: f.seed,
+    };
+    let opts = cogeo::remove::RemoveOptions {
+        labels: labels.clone(),
+        hole_threshold: f.hole_threshold,
+        dilate: f.dilate,
+        keep_alpha: f.keep_alpha,
+        stages: cogeo::remove::Stages { complete: !f.removal_only, prune: !f.no_prune, refine: !f.no_refine },
+        fuse: cogeo::fuse::FuseConfig { stride: f.stride.max(1), ..Default::default() },
+        prune: match (f.prune_near, f.prune_radius) {
+            (None, None) => None,
+            (near, radius) => {
+                let near = near.or(radius.map(|r| r * 2.0 / 3.0)).unwrap();
+                Some(cogeo::fuse::PruneConfig {
+                    near,
+                    radius: radius.unwrap_or(near * 1.5),
+                    min_neighbours: f.prune_min_neighbours,
+                })
+            }
+        },
+        refine: cogeo::refine::RefineConfig {
+            iters: f.refine_iters,
+            trust_radius: f.trust_radius,
+            background: f.background,
+            seed: f.seed,
+            ..Default::default()
+        },
+        background: f.background,
+    };
+    let gpu = open_gpu(&a.device)?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    eprintln!(
+        "removing label(s) {labels:?} from {} Gaussians; editing {} views on {}",
+        scene.len(),
+        data.train.len(),
+        gpu.info().name
+    );
+    let cameras: Vec<Camera> = data.train.iter().map(|v| v.camera.clone()).collect();
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>9} [{bar:30}] {pos}/{len} {elapsed_precise}")
+            .unwrap()
+            .progress_chars("=> "),
+    );
+    let start = std::time::Instant::now();
+    let removal = cogeo::remove::remove(
+        &gpu,
+        &scene,
+        &scene_labels,
+        &cameras,
+        data.extent,
+        &opts,
+        &mut completer,
+        &mut |stage, done, total| {
+            bar.set_message(stage.to_string());
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    )?;
+    bar.finish_and_clear();
+    // outputs: edited views, then held-out views before / after
+    let out = &a.out;
+    let v = &removal.views;
+    write_views(&out.join("before"), &cameras, &v.iter().map(|x| x.before.clone()).collect::<Vec<_>>())?;
+    write_views(&out.join("after"), &cameras, &v.iter().map(|x| x.after.clone()).collect::<Vec<_>>())?;
+    write_views(&out.join("removed"), &cameras, &v.iter().map(|x| x.removed.clone()).collect::<Vec<_>>())?;
+    std::fs::create_dir_all(out.join("mask"))?;
+    for (c, x) in cameras.iter().zip(v) {
+        // hole mask: 255 = synthesized, 128 = hole kept from other views' Gaussians
+        let m: Vec<u8> = x
+            .hole
+            .iter()
+            .zip(&x.fill)
+            .map(|(&h, &f)| {
+                if f {
+                    255
+                } else if h {
+                    128
+                } else {
+                    0
+                }
+            })
+            .collect();
+        cogeo::io::write_png(&out.join(format!("mask/{}.png", c.name)), c.width, c.height, image::ColorType::L8, &m)?;
+    }
+    if !f.removal_only {
+        write_views(&out.join("inpainted"), &cameras, &v.iter().map(|x| x.inpainted.clone()).collect::<Vec<_>>())?;
+        std::fs::create_dir_all(out.join("depth"))?;
+        for (c, x) in cameras.iter().zip(v) {
+            write_exr(&out.join(format!("depth/{}.exr", c.name)), c.width, c.height, &[("Y", &x.depth)])?;
+        }
+    }
+    let test_cams: Vec<Camera> = data.test.iter().map(|v| v.camera.clone()).collect();
+    let test_before = cogeo::remove::render_rgb(&gpu, &scene, &test_cams, f.background)?;
+    let test_after = cogeo::remove::render_rgb(&gpu, &removal.scene, &test_cams, f.background)?;
+    write_views(&out.join("test_before"), &test_cams, &test_before)?;
+    write_views(&out.join("test_after"), &test_cams, &test_after)?;
+    let synth = cogeo::eval::synth_metrics(&a.data, &test_cams, &test_after, &labels)?;
+    let depth_error = cogeo::eval::synth_depth_error(
+        &a.data,
+        &cameras,
+        &v.iter().map(|x| x.depth.clone()).collect::<Vec<_>>(),
+        &v.iter().map(|x| x.fill.clone()).collect::<Vec<_>>(),
+    )?;
+    ply::write_ply(&removal.scene, &out.join("scene.ply"))?;
+    let mut report = removal.report;
+    report["scene"] = serde_json::json!(a.scene);
+    report["device"] = serde_json::json!(gpu.info().name);
+    report["total_seconds"] = serde_json::json!(start.elapsed().as_secs_f64());
+    report["held_out_vs_ground_truth"] = serde_json::json!(synth);
+    report["fill_depth_vs_ground_truth"] =
+        serde_json::json!(depth_error.map(|(rel, rmse)| serde_json::json!({"abs_rel": rel, "rmse": rmse})));
+    cogeo::io::write_atomic(&out.join("report.json"), |w| {
+        serde_json::to_writer_pretty(&mut *w, &report)?;
+        Ok(())
+    })?;
+    let bg = report["background_psnr_vs_original"]["mean"].as_f64().unwrap_or(f64::NAN);
+    let gt = synth
+        .map(|m| format!("; held-out masked PSNR vs ground truth {:.2} dB (SSIM {:.3})", m.masked_psnr, m.masked_ssim))
+        .unwrap_or_default();
+    eprintln!(
+        "done in {:.1} s: {} -> {} Gaussians; background PSNR vs original render {bg:.2} dB{gt}; wrote {}",
+        start.elapsed().as_secs_f64(),
+        scene.len(),
+        removal.scene.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn cmd_run(a: RunArgs) -> Result<()> {
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    let train_dir = a.out.join("train");
+    eprintln!("== 1/3 train");
+    cmd_train(TrainArgs {
+        data: a.data.clone(),
+        out: train_dir.clone(),
+        images: a.images.clone(),
+        iters: a.iters,
+        resume: false,
+        checkpoint_every: 0,
+        sh_degree: a.sh_degree,
+        no_densify: false,
+        strategy: cogeo::train::trainer::Strategy::Adc,
+        max_gaussians: 3_000_000,
+        densify_until: None,
+        background: a.removal.background,
+        seed: a.removal.seed,
+        device: a.device.clone(),
+    })?;
+    eprintln!("== 2/3 tag");
+    let tagged = a.out.join("tagged.ply");
+    cmd_tag(TagArgs {
+        scene: train_dir.join("scene.ply"),
+        data: a.data.clone(),
+        images: a.images.clone(),
+        masks: a.masks.clone(),
+        method: a.tag_method,
+        out: tagged.clone(),
+        iters: a.tag_iters,
+        dim: 16,
+        lambda: 0.1,
+        knn: 5,
+        margin: 0.0,
+        seed: a.removal.seed,
+        device: a.device.clone(),
+    })?;
+    eprintln!("== 3/3 remove");
+    cmd_remove(RemoveArgs {
+        scene: tagged,
+        data: a.data,
+        images: a.images,
+        out: a.out.join("removal"),
+        removal: a.removal,
+        device: a.device,
+    })
+}
+
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -652,6 +1029,8 @@ fn main() {
         Command::Synth(a) => cmd_synth(a),
         Command::Train(a) => cmd_train(a),
         Command::Tag(a) => cmd_tag(a),
+        Command::Remove(a) => cmd_remove(a),
+        Command::Run(a) => cmd_run(a),
     };
     if let Err(e) = result {
         // one line: the error and its causes

@@ -100,6 +100,52 @@ impl GaussianScene {
         Ok(())
     }
 
+    /// The Gaussians whose `keep` flag is set, in order, extra properties included.
+    pub fn subset(&self, keep: &[bool]) -> GaussianScene {
+        let k = self.sh_coeffs() * 3;
+        let idx: Vec<usize> = (0..self.len()).filter(|&i| keep[i]).collect();
+        GaussianScene {
+            means: idx.iter().map(|&i| self.means[i]).collect(),
+            normals: idx.iter().map(|&i| self.normals.get(i).copied().unwrap_or([0.0; 3])).collect(),
+            log_scales: idx.iter().map(|&i| self.log_scales[i]).collect(),
+            quats: idx.iter().map(|&i| self.quats[i]).collect(),
+            opacity_logits: idx.iter().map(|&i| self.opacity_logits[i]).collect(),
+            sh_degree: self.sh_degree,
+            sh: idx.iter().flat_map(|&i| self.sh[i * k..(i + 1) * k].iter().copied()).collect(),
+            extras: self
+                .extras
+                .iter()
+                .map(|e| ExtraProperty {
+                    name: e.name.clone(),
+                    ty: e.ty,
+                    values: idx.iter().map(|&i| e.values[i]).collect(),
+                })
+                .collect(),
+        }
+    }
+
+    /// Appends `other`'s Gaussians (same SH degree). Extra properties `other` lacks get 0 for its
+    /// Gaussians; properties only `other` has are dropped.
+    pub fn append(&mut self, other: &GaussianScene) -> Result<()> {
+        if other.sh_degree != self.sh_degree {
+            bail!("cannot append a scene of SH degree {} to one of degree {}", other.sh_degree, self.sh_degree);
+        }
+        self.means.extend_from_slice(&other.means);
+        self.normals.resize(self.means.len() - other.len(), [0.0; 3]);
+        self.normals.extend((0..other.len()).map(|i| other.normals.get(i).copied().unwrap_or([0.0; 3])));
+        self.log_scales.extend_from_slice(&other.log_scales);
+        self.quats.extend_from_slice(&other.quats);
+        self.opacity_logits.extend_from_slice(&other.opacity_logits);
+        self.sh.extend_from_slice(&other.sh);
+        for e in &mut self.extras {
+            match other.extras.iter().find(|o| o.name == e.name) {
+                Some(o) => e.values.extend_from_slice(&o.values),
+                None => e.values.resize(e.values.len() + other.len(), 0.0),
+            }
+        }
+        Ok(())
+    }
+
     /// The extra properties `{prefix}0..{prefix}{D-1}` as an N x D row-major matrix, if present.
     pub fn feature_matrix(&self, prefix: &str) -> Option<(Vec<f32>, usize)> {
         let mut columns = Vec::new();

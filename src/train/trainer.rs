@@ -185,6 +185,9 @@ pub struct Trainer {
     /// When set, each geometry tensor's (means, scales, rotations) update per step is clipped to
     /// this Euclidean norm (a trust region).
     pub trust_radius: Option<f32>,
+    /// Render with the scene's full SH degree from the first step (fine-tuning a trained scene)
+    /// instead of growing it one band per 1000 iterations.
+    pub full_sh: bool,
     mcmc: McmcPasses,
     /// What the last MCMC relocation did.
     pub last_relocation: RelocationStats,
@@ -223,6 +226,7 @@ impl Trainer {
             profile: false,
             frozen: Frozen::default(),
             trust_radius: None,
+            full_sh: false,
             mcmc: McmcPasses::new(gpu)?,
             last_relocation: RelocationStats::default(),
             last_timings: Vec::new(),
@@ -239,6 +243,9 @@ impl Trainer {
     }
 
     fn active_sh_degree(&self) -> u32 {
+        if self.full_sh {
+            return self.scene.sh_degree;
+        }
         (self.step / 1000).min(self.scene.sh_degree)
     }
 

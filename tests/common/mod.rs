@@ -2,6 +2,8 @@
 //! validation message), and seeded random scenes with the hard cases the conventions name.
 #![allow(dead_code)]
 
+pub mod onnx;
+
 use cogeo::demo::Rng;
 use cogeo::gpu::{DeviceChoice, Gpu};
 use cogeo::scene::{Camera, GaussianScene};

@@ -1,0 +1,238 @@
+//! Depth completion of one view, stage 1 (scale anchoring) and the model-free stage 2.
+//!
+//! A monocular prior D_mono is only known up to an affine map (in disparity for Depth Anything V2,
+//! in depth for Depth Anything 3). It is anchored to the scene's rendered depth D_render by least
+//! squares on the background (pixels outside the dilated hole that the scene covers):
+//! `(a, b) = argmin sum (a x + b - y)^2` in the space the prior is affine in; then
+//! `D_anchor = M_soft D_align + (1 - M_soft) D_render` with the softly dilated hole mask M_soft.
+//!
+//! Priors (`DepthPrior`):
+//! - `BuiltIn`: the harmonic completion of the rendered inverse depth from the hole boundary. Inverse
+//!   depth of a plane is affine in pixel coordinates, and harmonic interpolation reproduces affine
+//!   data exactly, so a hole over a planar background (floor, wall) gets that plane's depth.
+//! - `DepthAnythingV2`: input `image` [1, 3, H, W] ImageNet-normalized RGB with H and W multiples of
+//!   14 (the view resized to the nearest such size, longer side at most 518), output [1, H, W] (or
+//!   [1, 1, H, W]) affine-invariant disparity, fitted in disparity.
+//! - `DepthAnything3`: input [1, 3, 504, 504] ImageNet-normalized RGB, output [1, 504, 504] (or
+//!   [1, 1, 504, 504]) depth, fitted in depth.
+//!
+//! Either model may name its single input and output as it likes.
+
+use super::image::{feather, harmonic_fill, resize_bilinear};
+use crate::onnx::{Model, Tensor};
+use anyhow::{bail, Result};
+use std::path::Path;
+
+/// Least-squares scale and shift: argmin over (a, b) of sum over `select` of (a x + b - y)^2, in f64.
+/// None when fewer than two selected pixels or x is constant over them.
+pub fn fit_scale_shift(x: &[f32], y: &[f32], select: &[bool]) -> Option<(f64, f64)> {
+    let (mut n, mut sx, mut sy, mut sxx, mut sxy) = (0f64, 0f64, 0f64, 0f64, 0f64);
+    for i in 0..x.len() {
+        if select[i] {
+            let (a, b) = (x[i] as f64, y[i] as f64);
+            n += 1.0;
+            sx += a;
+            sy += b;
+            sxx += a * a;
+            sxy += a * b;
+        }
+    }
+    if n < 2.0 {
+        return None;
+    }
+    // centered normal equations (better conditioned than the raw ones)
+    let (mx, my) = (sx / n, sy / n);
+    let var = sxx / n - mx * mx;
+    if var <= 1e-12 * (mx * mx).max(1e-30) {
+        return None;
+    }
+    let a = (sxy / n - mx * my) / var;
+    Some((a, my - a * mx))
+}
+
+/// The space a prior is affine-invariant in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum PriorSpace {
+    Disparity,
+    Depth,
+}
+
+/// Which ONNX depth contract a model follows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
+pub enum DepthContract {
+    /// Depth Anything V2: sides multiple of 14, affine-invariant disparity out.
+    DepthAnythingV2,
+    /// Depth Anything 3: 504 x 504 in, depth out.
+    DepthAnything3,
+}
+
+pub enum DepthPrior {
+    BuiltIn,
+    Onnx(Box<Model>, DepthContract),
+}
+
+const IMAGENET_MEAN: [f32; 3] = [0.485, 0.456, 0.406];
+const IMAGENET_STD: [f32; 3] = [0.229, 0.224, 0.225];
+
+/// The Depth Anything V2 input size for a w x h view: both sides multiples of 14, the longer at most
+/// 518, the aspect ratio kept as closely as the multiples allow.
+pub fn dav2_size(w: usize, h: usize) -> (usize, usize) {
+    let scale = (518.0 / w.max(h) as f64).min(1.0);
+    let snap = |v: usize| (((v as f64 * scale) / 14.0).round() as usize).max(1) * 14;
+    (snap(w), snap(h))
+}
+
+/// Everything a prior may look at.
+pub struct DepthView<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// The completed RGB (planar).
+    pub image: &'a [f32],
+    /// Expected depth rendered from the scene after removal.
+    pub render_depth: &'a [f32],
+    /// Where the rendered depth is trustworthy (covered, outside the hole).
+    pub valid: &'a [bool],
+}
+
+impl DepthPrior {
+    pub fn onnx(path: &Path, contract: DepthContract) -> Result<DepthPrior> {
+        let model = Model::load(path)?;
+        if model.input_names().len() != 1 || model.output_names().is_empty() {
+            bail!(
+                "{}: a depth model needs one input and an output, it has inputs {:?} and outputs {:?}",
+                path.display(),
+                model.input_names(),
+                model.output_names()
+            );
+        }
+        Ok(DepthPrior::Onnx(Box::new(model), contract))
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            DepthPrior::BuiltIn => "built-in harmonic inverse depth".into(),
+            DepthPrior::Onnx(m, c) => format!("onnx {:?} {}", c, m.path().display()),
+        }
+    }
+
+    /// The prior for a view at full resolution and the space it is affine in.
+    pub fn predict(&mut self, v: &DepthView) -> Result<(Vec<f32>, PriorSpace)> {
+        let (w, h) = (v.width, v.height);
+        match self {
+            DepthPrior::BuiltIn => {
+                let disparity: Vec<f32> = v
+                    .render_depth
+                    .iter()
+                    .zip(v.valid)
+                    .map(|(&d, &ok)| if ok && d > 0.0 { 1.0 / d } else { 0.0 })
+                    .collect();
+                Ok((harmonic_fill(&disparity, v.valid, w, h, 1), PriorSpace::Disparity))
+            }
+            DepthPrior::Onnx(model, contract) => {
+                let (iw, ih) = match contract {
+                    DepthContract::DepthAnythingV2 => dav2_size(w, h),
+                    DepthContract::DepthAnything3 => (504, 504),
+                };
+                let mut input = resize_bilinear(v.image, w, h, 3, iw, ih);
+                for c in 0..3 {
+                    for x in &mut input[c * iw * ih..(c + 1) * iw * ih] {
+                        *x = (*x - IMAGENET_MEAN[c]) / IMAGENET_STD[c];
+                    }
+                }
+                let name = model.input_names()[0].clone();
+                let out = model.run(&[(&name, &Tensor::new(vec![1, 3, ih as i64, iw as i64], input))])?;
+                let o = &out[0];
+                if o.data.len() != iw * ih {
+                    bail!("{}: depth output has shape {:?}, expected [1, {ih}, {iw}]", model.path().display(), o.shape);
+                }
+                let space = match contract {
+                    DepthContract::DepthAnythingV2 => PriorSpace::Disparity,
+                    DepthContract::DepthAnything3 => PriorSpace::Depth,
+                };
+                Ok((resize_bilinear(&o.data, iw, ih, 1, w, h), space))
+            }
+        }
+    }
+}
+
+/// The anchored depth of one view and how the fit went.
+#[derive(Clone, Debug)]
+pub struct Anchored {
+    pub depth: Vec<f32>,
+    pub scale: f64,
+    pub shift: f64,
+    pub space: PriorSpace,
+    /// Background pixels used for the fit.
+    pub fit_pixels: usize,
+    /// RMS of the fit residual over them (in the prior's space).
+    pub residual: f64,
+}
+
+/// Stage 1: fits `prior` to the rendered depth on `v.valid` and blends it in over the hole with a
+/// mask feathered over `soft_radius` pixels.
+pub fn anchor(v: &DepthView, prior: &[f32], space: PriorSpace, hole: &[bool], soft_radius: f32) -> Result<Anchored> {
+    let (w, h) = (v.width, v.height);
+    let target: Vec<f32> = match space {
+        PriorSpace::Disparity => v.render_depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect(),
+        PriorSpace::Depth => v.render_depth.to_vec(),
+    };
+    let select: Vec<bool> = (0..w * h).map(|i| v.valid[i] && v.render_depth[i] > 0.0).collect();
+    let (a, b) = fit_scale_shift(prior, &target, &select).ok_or_else(|| {
+        anyhow::anyhow!("depth anchoring: the prior is constant or fewer than 2 background pixels are covered")
+    })?;
+    let fit_pixels = select.iter().filter(|&&s| s).count();
+    let residual =
+        ((0..w * h).filter(|&i| select[i]).map(|i| (a * prior[i] as f64 + b - target[i] as f64).powi(2)).sum::<f64>()
+            / fit_pixels as f64)
+            .sqrt();
+    // smallest background depth seen: aligned disparities are clamped so depth stays positive
+    let min_depth = (0..w * h).filter(|&i| select[i]).map(|i| v.render_depth[i]).fold(f32::INFINITY, f32::min);
+    let soft = feather(hole, w, h, soft_radius);
+    let depth = (0..w * h)
+        .map(|i| {
+            let aligned = a * prior[i] as f64 + b;
+            let d_align = match space {
+                PriorSpace::Disparity => 1.0 / aligned.max(1e-6),
+                PriorSpace::Depth => aligned.max(0.05 * min_depth as f64),
+            } as f32;
+            let render = if v.render_depth[i] > 0.0 { v.render_depth[i] } else { d_align };
+            soft[i] * d_align + (1.0 - soft[i]) * render
+        })
+        .collect();
+    Ok(Anchored { depth, scale: a, shift: b, space, fit_pixels, residual })
+}
+
+/// Model-free stage 2: edge-aware diffusion of the anchored depth inside the hole, guided by the
+/// completed image. Each hole pixel repeatedly becomes the average of its 8 neighbours weighted by
+/// exp(-|I_p - I_q|^2 / (2 sigma^2)), in inverse depth (where planes are affine); pixels outside the
+/// hole are fixed, so the result meets the background exactly at the hole boundary and depth edges
+/// follow color edges inside it.
+pub fn refine_edge_aware(depth: &[f32], image: &[f32], hole: &[bool], w: usize, h: usize, iters: usize) -> Vec<f32> {
+    let sigma2 = 2.0 * 0.08f32 * 0.08;
+    let mut x: Vec<f32> = depth.iter().map(|&d| 1.0 / d.max(1e-6)).collect();
+    let cells: Vec<usize> = (0..w * h).filter(|&i| hole[i]).collect();
+    let hw = w * h;
+    for _ in 0..iters {
+        for &i in &cells {
+            let (px, py) = ((i % w) as i64, (i / w) as i64);
+            let (mut sum, mut wsum) = (0f32, 0f32);
+            for dy in -1..=1i64 {
+                for dx in -1..=1i64 {
+                    let (qx, qy) = (px + dx, py + dy);
+                    if (dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= w as i64 || qy >= h as i64 {
+                        continue;
+                    }
+                    let q = qy as usize * w + qx as usize;
+                    let diff: f32 = (0..3).map(|c| (image[c * hw + i] - image[c * hw + q]).powi(2)).sum();
+                    let wt = (-diff / sigma2).exp() * if dx != 0 && dy != 0 { 0.7 } else { 1.0 };
+                    sum += wt * x[q];
+                    wsum += wt;
+                }
+            }
+            if wsum > 1e-12 {
+                x[i] = sum / wsum;
+            }
+        }
+    }
+    x.into_iter().map(|v| 1.0 / v.max(1e-6)).collect()
+}

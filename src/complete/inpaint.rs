@@ -1,0 +1,104 @@
+//! RGB completion of one view: fill the pixels of a hole mask.
+//!
+//! - `Inpainter::BuiltIn` needs no weights: the harmonic (membrane) interpolant of the pixels around
+//!   the hole, solved coarse to fine (`image::harmonic_fill`). Deterministic; smooth rather than
+//!   textured, which is what a masked PSNR rewards when nothing is known about the hole.
+//! - `Inpainter::Onnx` runs a user-supplied model with the LaMa contract: inputs `image`
+//!   [1, 3, 512, 512] RGB in [0, 1] and `mask` [1, 1, 512, 512] (1 = hole), one output [1, 3, 512, 512]
+//!   RGB in [0, 1]. The hole's bounding box, grown by half its size (and at least 16 pixels) for
+//!   context, is cropped, resized to 512 x 512, inpainted, resized back, and only the hole pixels are
+//!   pasted into the view.
+
+use super::image::{bounding_box, crop, harmonic_fill, resize_bilinear, Rect};
+use crate::onnx::{Model, Tensor};
+use anyhow::{bail, Result};
+use std::path::Path;
+
+/// Side of the LaMa contract's square input.
+pub const LAMA_SIZE: usize = 512;
+
+pub enum Inpainter {
+    BuiltIn,
+    Onnx(Box<Model>),
+}
+
+impl Inpainter {
+    /// The ONNX inpainter of `path`, checked against the LaMa contract.
+    pub fn onnx(path: &Path) -> Result<Inpainter> {
+        let model = Model::load(path)?;
+        model.expect("LaMa inpainting", &["image", "mask"], 1)?;
+        Ok(Inpainter::Onnx(Box::new(model)))
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            Inpainter::BuiltIn => "built-in harmonic".into(),
+            Inpainter::Onnx(m) => format!("onnx {}", m.path().display()),
+        }
+    }
+
+    /// Fills the `hole` pixels of the planar RGB `image` (w x h); pixels outside the hole are
+    /// returned unchanged.
+    pub fn inpaint(&mut self, image: &[f32], hole: &[bool], w: usize, h: usize) -> Result<Vec<f32>> {
+        if image.len() != 3 * w * h || hole.len() != w * h {
+            bail!("inpaint: image and mask sizes disagree with {w}x{h}");
+        }
+        let Some(bbox) = bounding_box(hole, w) else {
+            return Ok(image.to_vec());
+        };
+        match self {
+            Inpainter::BuiltIn => {
+                let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+                Ok(harmonic_fill(image, &known, w, h, 3))
+            }
+            Inpainter::Onnx(model) => lama(model, image, hole, w, h, bbox),
+        }
+    }
+}
+
+/// The context window around a hole: the box grown by half its size (at least `min_margin`),
+/// clamped to the image.
+pub fn context_window(b: Rect, w: usize, h: usize, min_margin: usize) -> Rect {
+    let mx = (b.width() / 2).max(min_margin);
+    let my = (b.height() / 2).max(min_margin);
+    Rect { x0: b.x0.saturating_sub(mx), y0: b.y0.saturating_sub(my), x1: (b.x1 + mx).min(w), y1: (b.y1 + my).min(h) }
+}
+
+fn lama(model: &mut Model, image: &[f32], hole: &[bool], w: usize, h: usize, bbox: Rect) -> Result<Vec<f32>> {
+    let win = context_window(bbox, w, h, 16);
+    let (cw, ch) = (win.width(), win.height());
+    let patch = crop(image, w, h, 3, win);
+    let hole_f: Vec<f32> = hole.iter().map(|&m| m as u8 as f32).collect();
+    let mask_patch = crop(&hole_f, w, h, 1, win);
+    let s = LAMA_SIZE;
+    let mut input = resize_bilinear(&patch, cw, ch, 3, s, s);
+    // zero the hole as LaMa's training did; any mask pixel touched by the hole counts as hole
+    let mask_big: Vec<f32> =
+        resize_bilinear(&mask_patch, cw, ch, 1, s, s).iter().map(|&v| (v > 0.0) as u8 as f32).collect();
+    for c in 0..3 {
+        for i in 0..s * s {
+            input[c * s * s + i] *= 1.0 - mask_big[i];
+        }
+    }
+    let out = model.run(&[
+        ("image", &Tensor::new(vec![1, 3, s as i64, s as i64], input)),
+        ("mask", &Tensor::new(vec![1, 1, s as i64, s as i64], mask_big)),
+    ])?;
+    let result = &out[0];
+    if result.data.len() != 3 * s * s {
+        bail!("{}: LaMa output has shape {:?}, expected [1, 3, {s}, {s}]", model.path().display(), result.shape);
+    }
+    let back = resize_bilinear(&result.data, s, s, 3, cw, ch);
+    let mut filled = image.to_vec();
+    for y in win.y0..win.y1 {
+        for x in win.x0..win.x1 {
+            if hole[y * w + x] {
+                let pi = (y - win.y0) * cw + (x - win.x0);
+                for c in 0..3 {
+                    filled[c * w * h + y * w + x] = back[c * cw * ch + pi].clamp(0.0, 1.0);
+                }
+            }
+        }
+    }
+    Ok(filled)
+}

@@ -1,0 +1,102 @@
+//! Stage 3 of removal, depth-guided completion of one view: RGB inpainting of the hole, then depth
+//! in two stages (scale anchoring of a monocular prior, then detail refinement in the hole).
+//!
+//! - `inpaint`: built-in harmonic fill, or a LaMa-contract ONNX model.
+//! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
+//!   edge-aware model-free refinement.
+//! - `diffusion`: the masked DDIM loop of a depth-inpainting denoiser (ONNX).
+//! - `image`: resizing, masks, harmonic fill.
+
+pub mod depth;
+pub mod diffusion;
+pub mod image;
+pub mod inpaint;
+
+use anyhow::Result;
+use depth::{DepthPrior, DepthView, PriorSpace};
+use diffusion::OnnxDenoiser;
+use inpaint::Inpainter;
+
+/// The models and settings of completion.
+pub struct Completer {
+    pub inpainter: Inpainter,
+    pub prior: DepthPrior,
+    pub refiner: Option<OnnxDenoiser>,
+    /// Feathering radius of M_soft in pixels.
+    pub soft_radius: f32,
+    /// Sweeps of the model-free edge-aware refinement.
+    pub refine_sweeps: usize,
+    /// DDIM steps of the learned refiner.
+    pub diffusion_steps: usize,
+    /// Use the depth prior at all (`false`: the ablation without depth guidance, which takes the
+    /// depth rendered after removal as it is).
+    pub depth_guidance: bool,
+    pub seed: u64,
+}
+
+/// The inputs of one view.
+pub struct ViewInputs<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// Render of the scene after removal (planar RGB).
+    pub rgb: &'a [f32],
+    pub alpha: &'a [f32],
+    pub expected_depth: &'a [f32],
+    /// Pixels to synthesize.
+    pub fill: &'a [bool],
+    /// The dilated hole (excluded from the depth fit).
+    pub hole: &'a [bool],
+}
+
+/// What completion produced for one view.
+pub struct Completed {
+    pub rgb: Vec<f32>,
+    pub depth: Vec<f32>,
+    pub scale: f64,
+    pub shift: f64,
+    pub space: Option<PriorSpace>,
+    pub fit_pixels: usize,
+    pub residual: f64,
+}
+
+impl Completer {
+    pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {
+        let (w, h) = (v.width, v.height);
+        let rgb = self.inpainter.inpaint(v.rgb, v.fill, w, h)?;
+        // rendered depth is trusted where the remaining scene covers the pixel, outside the hole
+        let valid: Vec<bool> = (0..w * h).map(|i| !v.hole[i] && !v.fill[i] && v.alpha[i] > 0.5).collect();
+        if !self.depth_guidance {
+            // ablation: the rendered depth where defined, else the mean background depth
+            let covered: Vec<f32> =
+                v.expected_depth.iter().zip(&valid).filter(|(_, &ok)| ok).map(|(&d, _)| d).collect();
+            let mean = if covered.is_empty() { 1.0 } else { covered.iter().sum::<f32>() / covered.len() as f32 };
+            let depth = (0..w * h).map(|i| if v.alpha[i] > 0.05 { v.expected_depth[i] } else { mean }).collect();
+            return Ok(Completed { rgb, depth, scale: 1.0, shift: 0.0, space: None, fit_pixels: 0, residual: 0.0 });
+        }
+        let view = DepthView { width: w, height: h, image: &rgb, render_depth: v.expected_depth, valid: &valid };
+        let (prior, space) = self.prior.predict(&view)?;
+        let anchored = depth::anchor(&view, &prior, space, v.fill, self.soft_radius)?;
+        let depth = match &mut self.refiner {
+            Some(den) => diffusion::masked_ddim(
+                &anchored.depth,
+                v.fill,
+                &rgb,
+                w,
+                h,
+                self.diffusion_steps,
+                self.seed ^ index as u64,
+                den,
+            )?,
+            None => depth::refine_edge_aware(&anchored.depth, &rgb, v.fill, w, h, self.refine_sweeps),
+        };
+        Ok(Completed {
+            rgb,
+            depth,
+            scale: anchored.scale,
+            shift: anchored.shift,
+            space: Some(space),
+            fit_pixels: anchored.fit_pixels,
+            residual: anchored.residual,
+        })
+    }
+}

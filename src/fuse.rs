@@ -1,0 +1,225 @@
+//! Stage 4 of removal: the completed depth of every edited view, inside its hole, becomes new
+//! Gaussians, and sparse background outliers near them are pruned.
+//!
+//! Back-projection: each hole pixel (every `stride`-th in x and y) at its completed depth z becomes a
+//! point colored from the inpainted image, with footprint z * stride / f (the pixel's size at that
+//! depth). Multi-view consistency: a point is dropped when, seen from another edited view, it lands
+//! inside that view's hole more than `tolerance` (relative) in front of that view's completed depth,
+//! i.e. it would float in front of the surface another view completed. Points behind it are only
+//! occluded there and are kept. Points of several views that fall in one voxel (the median footprint)
+//! are merged: position and color averaged.
+//!
+//! Pruning (kiddo): a background Gaussian is pruned when it lies within `near` of a patch Gaussian
+//! AND has fewer than `min_neighbours` other background Gaussians within `radius`.
+
+use crate::render::reference::SH_C0;
+use crate::scene::{Camera, GaussianScene};
+use kiddo::{KdTree, SquaredEuclidean};
+use std::collections::HashMap;
+
+/// One edited view's completion.
+pub struct FuseView<'a> {
+    pub camera: &'a Camera,
+    /// Inpainted planar RGB.
+    pub rgb: &'a [f32],
+    /// Completed camera-z depth.
+    pub depth: &'a [f32],
+    pub fill: &'a [bool],
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FuseConfig {
+    /// Sample every `stride`-th hole pixel in x and y.
+    pub stride: usize,
+    /// Relative depth disagreement that counts as floating in front of another view's completion.
+    pub tolerance: f32,
+    /// Initial opacity of the new Gaussians.
+    pub opacity: f32,
+}
+
+impl Default for FuseConfig {
+    fn default() -> Self {
+        FuseConfig { stride: 1, tolerance: 0.03, opacity: 0.9 }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PatchPoint {
+    pub position: [f64; 3],
+    pub rgb: [f32; 3],
+    pub footprint: f64,
+}
+
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct FuseStats {
+    pub sampled: usize,
+    pub inconsistent: usize,
+    pub merged_into: usize,
+}
+
+fn back_project(cam: &Camera, x: usize, y: usize, z: f64) -> [f64; 3] {
+    let pc = [(x as f64 + 0.5 - cam.cx) / cam.fx * z, (y as f64 + 0.5 - cam.cy) / cam.fy * z, z];
+    let d = [pc[0] - cam.translation[0], pc[1] - cam.translation[1], pc[2] - cam.translation[2]];
+    let r = cam.rotation;
+    // world = R^T (camera - t)
+    [
+        r[0][0] * d[0] + r[1][0] * d[1] + r[2][0] * d[2],
+        r[0][1] * d[0] + r[1][1] * d[1] + r[2][1] * d[2],
+        r[0][2] * d[0] + r[1][2] * d[1] + r[2][2] * d[2],
+    ]
+}
+
+/// Back-projects, checks consistency across views and merges.
+pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, FuseStats) {
+    let mut stats = FuseStats::default();
+    let stride = cfg.stride.max(1);
+    let mut points = Vec::new();
+    for (vi, v) in views.iter().enumerate() {
+        let (w, h) = (v.camera.width as usize, v.camera.height as usize);
+        let hw = w * h;
+        for y in (0..h).step_by(stride) {
+            for x in (0..w).step_by(stride) {
+                let i = y * w + x;
+                let z = v.depth[i] as f64;
+                if !v.fill[i] || z <= 0.0 || !z.is_finite() {
+                    continue;
+                }
+                stats.sampled += 1;
+                let p = back_project(v.camera, x, y, z);
+                let floats = views.iter().enumerate().any(|(vj, o)| {
+                    if vj == vi {
+                        return false;
+                    }
+                    let pc = o.camera.to_camera(p);
+                    if pc[2] <= 1e-6 {
+                        return false;
+                    }
+                    let u = o.camera.fx * pc[0] / pc[2] + o.camera.cx;
+                    let t = o.camera.fy * pc[1] / pc[2] + o.camera.cy;
+                    if u < 0.0 || t < 0.0 || u >= o.camera.width as f64 || t >= o.camera.height as f64 {
+                        return false;
+                    }
+                    let q = t as usize * o.camera.width as usize + u as usize;
+                    o.fill[q] && pc[2] < o.depth[q] as f64 * (1.0 - cfg.tolerance as f64)
+                });
+                if floats {
+                    stats.inconsistent += 1;
+                    continue;
+                }
+                let footprint = z * stride as f64 / v.camera.fx.min(v.camera.fy);
+                points.push(PatchPoint { position: p, rgb: [v.rgb[i], v.rgb[hw + i], v.rgb[2 * hw + i]], footprint });
+            }
+        }
+    }
+    if points.is_empty() {
+        return (points, stats);
+    }
+    let mut fp: Vec<f64> = points.iter().map(|p| p.footprint).collect();
+    fp.sort_by(|a, b| a.total_cmp(b));
+    let voxel = fp[fp.len() / 2];
+    // merge per voxel, in first-seen order (deterministic)
+    let mut cells: HashMap<[i64; 3], usize> = HashMap::new();
+    let mut sums: Vec<(PatchPoint, f64)> = Vec::new();
+    for p in &points {
+        let key = p.position.map(|c| (c / voxel).floor() as i64);
+        match cells.get(&key) {
+            Some(&k) => {
+                let (s, n) = &mut sums[k];
+                for a in 0..3 {
+                    s.position[a] += p.position[a];
+                    s.rgb[a] += p.rgb[a];
+                }
+                s.footprint = s.footprint.max(p.footprint);
+                *n += 1.0;
+            }
+            None => {
+                cells.insert(key, sums.len());
+                sums.push((*p, 1.0));
+            }
+        }
+    }
+    let merged: Vec<PatchPoint> = sums
+        .into_iter()
+        .map(|(s, n)| PatchPoint {
+            position: s.position.map(|c| c / n),
+            rgb: s.rgb.map(|c| c / n as f32),
+            footprint: s.footprint,
+        })
+        .collect();
+    stats.merged_into = merged.len();
+    (merged, stats)
+}
+
+/// The patch as Gaussians: isotropic scale of the footprint, identity rotation, high opacity, the
+/// color in SH band 0.
+pub fn patch_gaussians(points: &[PatchPoint], sh_degree: u32, opacity: f32) -> GaussianScene {
+    let k = crate::scene::sh_coeffs(sh_degree);
+    let mut s = GaussianScene { sh_degree, ..Default::default() };
+    let logit = (opacity / (1.0 - opacity)).ln();
+    for p in points {
+        s.means.push(p.position.map(|v| v as f32));
+        s.normals.push([0.0; 3]);
+        s.log_scales.push([(p.footprint.max(1e-6) * 0.6).ln() as f32; 3]);
+        s.quats.push([1.0, 0.0, 0.0, 0.0]);
+        s.opacity_logits.push(logit);
+        for b in 0..k {
+            for c in 0..3 {
+                s.sh.push(if b == 0 { ((p.rgb[c] as f64 - 0.5) / SH_C0) as f32 } else { 0.0 });
+            }
+        }
+    }
+    s
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct PruneConfig {
+    /// A background Gaussian within this distance of a patch Gaussian is a candidate.
+    pub near: f64,
+    /// Neighbourhood radius of the density test.
+    pub radius: f64,
+    /// Candidates with fewer background neighbours than this within `radius` are pruned.
+    pub min_neighbours: usize,
+}
+
+/// Which background Gaussians to prune (true = prune).
+pub fn prune_mask(background: &[[f32; 3]], patch: &[[f32; 3]], cfg: &PruneConfig) -> Vec<bool> {
+    if patch.is_empty() || background.is_empty() {
+        return vec![false; background.len()];
+    }
+    let mut patch_tree: KdTree<f64, 3> = KdTree::new();
+    for (i, p) in patch.iter().enumerate() {
+        patch_tree.add(&p.map(|v| v as f64), i as u64);
+    }
+    let mut bg_tree: KdTree<f64, 3> = KdTree::new();
+    for (i, p) in background.iter().enumerate() {
+        bg_tree.add(&p.map(|v| v as f64), i as u64);
+    }
+    background
+        .iter()
+        .map(|p| {
+            let q = p.map(|v| v as f64);
+            let nearest = patch_tree.nearest_one::<SquaredEuclidean>(&q);
+            if nearest.distance > cfg.near * cfg.near {
+                return false;
+            }
+            // within_unsorted counts the Gaussian itself
+            let neighbours = bg_tree.within_unsorted::<SquaredEuclidean>(&q, cfg.radius * cfg.radius).len() - 1;
+            neighbours < cfg.min_neighbours
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn back_projection_inverts_projection() {
+        let cam = Camera::look_at("c", 64, 48, 50.0, [1.0, -3.0, 1.5], [0.0, 0.0, 0.3], [0.0, 0.0, 1.0]);
+        let p = back_project(&cam, 10, 30, 2.5);
+        let pc = cam.to_camera(p);
+        assert!((pc[2] - 2.5).abs() < 1e-9);
+        assert!((cam.fx * pc[0] / pc[2] + cam.cx - 10.5).abs() < 1e-9);
+        assert!((cam.fy * pc[1] / pc[2] + cam.cy - 30.5).abs() < 1e-9);
+    }
+}
