@@ -236,6 +236,9 @@ struct RemovalFlags {
     /// image, mask; output the predicted noise). Default: built-in edge-aware refinement.
     #[arg(long)]
     depth_refiner: Option<PathBuf>,
+    /// Sweeps of the built-in edge-aware depth refinement (0 = keep the anchored depth).
+    #[arg(long, default_value_t = 60)]
+    depth_sweeps: usize,
     /// DDIM steps of --depth-refiner.
     #[arg(long, default_value_t = 20)]
     diffusion_steps: usize,
@@ -832,7 +835,7 @@ fn cmd_remove(a: RemoveArgs) -> Result<()> {
         },
         refiner: f.depth_refiner.as_deref().map(OnnxDenoiser::load).transpose()?,
         soft_radius: f.soft_radius,
-        refine_sweeps: 60,
+        refine_sweeps: f.depth_sweeps,
         diffusion_steps: f.diffusion_steps,
         depth_guidance: !f.no_depth_guidance,
         seed: f.seed,

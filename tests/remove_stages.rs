@@ -39,7 +39,8 @@ fn least_squares_recovers_a_known_scale_and_shift() {
     let render_depth: Vec<f32> = truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
     let valid: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
-    let view = DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
+    let view =
+        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid, covered: &valid };
     let anchored = depth::anchor(&view, &prior, PriorSpace::Disparity, &hole, 4.0).unwrap();
     assert!((anchored.scale - 2.5).abs() < 1e-5 && (anchored.shift - 0.3).abs() < 1e-6);
     assert!(anchored.residual < 1e-6);
@@ -162,7 +163,14 @@ fn onnx_depth_priors_are_anchored_in_their_own_space() {
         assert!(lo >= 0.0 && hi <= 1.0, "encoding out of range {lo}..{hi}");
         let image: Vec<f32> = (0..3).flat_map(|_| encoded.iter().copied()).collect();
         let render_depth: Vec<f32> = depth_truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { d }).collect();
-        let view = DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
+        let view = DepthView {
+            width: w,
+            height: h,
+            image: &image,
+            render_depth: &render_depth,
+            valid: &valid,
+            covered: &valid,
+        };
         let mut prior = DepthPrior::onnx(&path, contract).unwrap();
         let (p, space) = prior.predict(&view).unwrap();
         assert_eq!(p.len(), w * h);

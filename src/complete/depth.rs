@@ -7,7 +7,8 @@
 //! `D_anchor = M_soft D_align + (1 - M_soft) D_render` with the softly dilated hole mask M_soft.
 //!
 //! Priors (`DepthPrior`):
-//! - `BuiltIn`: the harmonic completion of the rendered inverse depth from the hole boundary. Inverse
+//! - `BuiltIn`: the rendered depth where the remaining Gaussians cover the pixel, and elsewhere the
+//!   harmonic completion of the rendered inverse depth from the uncovered region's boundary. Inverse
 //!   depth of a plane is affine in pixel coordinates, and harmonic interpolation reproduces affine
 //!   data exactly, so a hole over a planar background (floor, wall) gets that plane's depth.
 //! - `DepthAnythingV2`: input `image` [1, 3, H, W] ImageNet-normalized RGB with H and W multiples of
@@ -90,8 +91,11 @@ pub struct DepthView<'a> {
     pub image: &'a [f32],
     /// Expected depth rendered from the scene after removal.
     pub render_depth: &'a [f32],
-    /// Where the rendered depth is trustworthy (covered, outside the hole).
+    /// Where the rendered depth is trustworthy for the fit (covered, outside the hole).
     pub valid: &'a [bool],
+    /// Where the remaining Gaussians cover the pixel (inside the hole too: background seen from
+    /// other views). The built-in prior keeps their depth and interpolates only the rest.
+    pub covered: &'a [bool],
 }
 
 impl DepthPrior {
@@ -120,13 +124,10 @@ impl DepthPrior {
         let (w, h) = (v.width, v.height);
         match self {
             DepthPrior::BuiltIn => {
-                let disparity: Vec<f32> = v
-                    .render_depth
-                    .iter()
-                    .zip(v.valid)
-                    .map(|(&d, &ok)| if ok && d > 0.0 { 1.0 / d } else { 0.0 })
-                    .collect();
-                Ok((harmonic_fill(&disparity, v.valid, w, h, 1), PriorSpace::Disparity))
+                let known: Vec<bool> = (0..w * h).map(|i| v.covered[i] && v.render_depth[i] > 0.0).collect();
+                let disparity: Vec<f32> =
+                    (0..w * h).map(|i| if known[i] { 1.0 / v.render_depth[i] } else { 0.0 }).collect();
+                Ok((harmonic_fill(&disparity, &known, w, h, 1), PriorSpace::Disparity))
             }
             DepthPrior::Onnx(model, contract) => {
                 let (iw, ih) = match contract {

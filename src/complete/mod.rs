@@ -73,7 +73,15 @@ impl Completer {
             let depth = (0..w * h).map(|i| if v.alpha[i] > 0.05 { v.expected_depth[i] } else { mean }).collect();
             return Ok(Completed { rgb, depth, scale: 1.0, shift: 0.0, space: None, fit_pixels: 0, residual: 0.0 });
         }
-        let view = DepthView { width: w, height: h, image: &rgb, render_depth: v.expected_depth, valid: &valid };
+        let covered: Vec<bool> = (0..w * h).map(|i| v.alpha[i] > 0.5).collect();
+        let view = DepthView {
+            width: w,
+            height: h,
+            image: &rgb,
+            render_depth: v.expected_depth,
+            valid: &valid,
+            covered: &covered,
+        };
         let (prior, space) = self.prior.predict(&view)?;
         let anchored = depth::anchor(&view, &prior, space, v.fill, self.soft_radius)?;
         let depth = match &mut self.refiner {
@@ -87,7 +95,12 @@ impl Completer {
                 self.seed ^ index as u64,
                 den,
             )?,
-            None => depth::refine_edge_aware(&anchored.depth, &rgb, v.fill, w, h, self.refine_sweeps),
+            None => {
+                // covered pixels keep the depth of the Gaussians that cover them (seen from other
+                // views); only the interpolated part follows the image's edges
+                let free: Vec<bool> = (0..w * h).map(|i| v.fill[i] && !covered[i]).collect();
+                depth::refine_edge_aware(&anchored.depth, &rgb, &free, w, h, self.refine_sweeps)
+            }
         };
         Ok(Completed {
             rgb,
