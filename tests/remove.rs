@@ -124,3 +124,44 @@ fn removing_two_objects_beats_removal_only_and_keeps_the_background() {
     }
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// `cogeo run`: train, tag and remove in one command (tiny settings).
+#[test]
+fn run_does_train_tag_and_remove_in_one_command() {
+    let exe = env!("CARGO_BIN_EXE_cogeo");
+    let root = std::env::temp_dir().join(format!("cogeo_run_{}", std::process::id()));
+    let path = |p: &str| root.join(p).to_string_lossy().into_owned();
+    let data = path("data");
+    run_cogeo(exe, &["synth", "--out", &data, "--width", "32", "--height", "24", "--views", "8", "--objects", "2"]);
+    let out = path("run");
+    run_cogeo(
+        exe,
+        &[
+            "run",
+            "--data",
+            &data,
+            "--masks",
+            "object_mask",
+            "--out",
+            &out,
+            "--iters",
+            "60",
+            "--sh-degree",
+            "0",
+            "--tag-method",
+            "vote",
+            "--labels",
+            "1",
+            "--refine-iters",
+            "10",
+        ],
+    );
+    assert!(root.join("run/train/scene.ply").is_file());
+    assert!(root.join("run/tagged.ply").is_file() && root.join("run/tagged.json").is_file());
+    let r = report(&path("run/removal"));
+    assert_eq!(r["labels"], serde_json::json!([1]));
+    assert_eq!(r["refine"]["iters"].as_u64().unwrap(), 10);
+    let clean = cogeo::scene::ply::read_ply(&root.join("run/removal/scene.ply")).unwrap();
+    assert_eq!(clean.len() as u64, r["gaussians"]["output"].as_u64().unwrap());
+    std::fs::remove_dir_all(&root).ok();
+}
