@@ -48,6 +48,58 @@ enum Command {
     Remove(RemoveArgs),
     /// The whole path from a capture: train, tag, remove, in one command.
     Run(RunArgs),
+    /// Score renders against ground-truth images inside masks (PSNR/SSIM on the mask, its bounding
+    /// box and the full image; with a synth dataset also never-seen / seen-elsewhere subsets,
+    /// leftover, depth error and floaters; LPIPS and FID through user-supplied ONNX models).
+    Eval(EvalArgs),
+}
+
+#[derive(Args)]
+struct EvalArgs {
+    /// Rendered images (PNG/JPEG); every image here is scored.
+    #[arg(long)]
+    renders: PathBuf,
+    /// Ground-truth images with the same names (for synth data: `gt_background/`).
+    #[arg(long)]
+    gt: PathBuf,
+    /// 8-bit masks with the same names; a pixel counts when its value is nonzero (or in --labels).
+    #[arg(long)]
+    masks: PathBuf,
+    /// Mask values that count, e.g. `1,2` (default: every nonzero value).
+    #[arg(long, value_delimiter = ',')]
+    labels: Vec<u8>,
+    /// Region of the headline numbers: mask (mean over mask pixels), bbox (the mask's bounding-box
+    /// crop, SPIn-NeRF) or full (whole image). All three are always in the JSON.
+    #[arg(long, value_enum, default_value = "mask")]
+    protocol: cogeo::eval::folder::Protocol,
+    /// The `cogeo synth` dataset the renders come from: adds never-seen / seen-elsewhere subsets
+    /// (`unseen_mask/`), the leftover-object score (`images/`), and enables --depth and --scene.
+    #[arg(long)]
+    data: Option<PathBuf>,
+    /// Rendered depth (camera z) as `<name>.exr`: AbsRel and RMSE inside the mask against
+    /// `depth_background/` (needs --data).
+    #[arg(long)]
+    depth: Option<PathBuf>,
+    /// The edited scene (PLY): floater score = opacity-weighted count of Gaussians farther than
+    /// --tau from the true surface in every view whose mask they project into (needs --data).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Floater threshold, relative to the true depth.
+    #[arg(long, default_value_t = 0.05)]
+    tau: f64,
+    /// Leftover score margin: a mask pixel counts as leftover when the render is closer to the
+    /// image with the objects than to the ground truth by more than this mean RGB difference.
+    #[arg(long, default_value_t = 0.05)]
+    leftover_margin: f32,
+    /// LPIPS network (ONNX; inputs in0, in1 [1,3,H,W] in [-1,1]; one output value).
+    #[arg(long)]
+    lpips_model: Option<PathBuf>,
+    /// FID feature network (ONNX; input images [N,3,299,299] in [0,1]; output [N,D]).
+    #[arg(long)]
+    fid_model: Option<PathBuf>,
+    /// Output JSON (written atomically).
+    #[arg(long, default_value = "metrics.json")]
+    out: PathBuf,
 }
 
 #[derive(Args)]
@@ -1016,6 +1068,42 @@ fn cmd_run(a: RunArgs) -> Result<()> {
     })
 }
 
+fn cmd_eval(a: EvalArgs) -> Result<()> {
+    use cogeo::eval::folder::{evaluate, EvalConfig};
+    if (a.depth.is_some() || a.scene.is_some()) && a.data.is_none() {
+        bail!("--depth and --scene need --data (the synth dataset with the true background depth)");
+    }
+    let cfg = EvalConfig {
+        renders: a.renders,
+        gt: a.gt,
+        masks: a.masks,
+        labels: a.labels,
+        protocol: a.protocol,
+        data: a.data,
+        depth: a.depth,
+        scene: a.scene,
+        tau: a.tau,
+        leftover_margin: a.leftover_margin,
+        lpips: a.lpips_model,
+        fid: a.fid_model,
+    };
+    let metrics = evaluate(&cfg)?;
+    cogeo::io::write_atomic(&a.out, |w| {
+        serde_json::to_writer_pretty(&mut *w, &metrics)?;
+        Ok(())
+    })?;
+    let h = &metrics["headline"];
+    eprintln!(
+        "{} view(s), {:?} protocol: PSNR {:.2} dB, SSIM {:.4}; wrote {}",
+        metrics["views"].as_array().map_or(0, |v| v.len()),
+        cfg.protocol,
+        h["psnr"].as_f64().unwrap_or(f64::NAN),
+        h["ssim"].as_f64().unwrap_or(f64::NAN),
+        a.out.display()
+    );
+    Ok(())
+}
+
 fn main() {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -1034,6 +1122,7 @@ fn main() {
         Command::Tag(a) => cmd_tag(a),
         Command::Remove(a) => cmd_remove(a),
         Command::Run(a) => cmd_run(a),
+        Command::Eval(a) => cmd_eval(a),
     };
     if let Err(e) = result {
         // one line: the error and its causes

@@ -1,0 +1,242 @@
+//! `cogeo eval`: scores a folder of renders against a folder of ground-truth images inside masks,
+//! with the synth-only extras when the `cogeo synth` dataset is given.
+
+use super::models::{FidFeatures, Lpips};
+use super::{bbox_scores, floater_score, frechet_distance, full_scores, leftover_fraction, mask_scores, Scores};
+use crate::train::dataset::{find_image, load_rgb};
+use anyhow::{anyhow, bail, Context, Result};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+/// Which region the headline numbers use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Protocol {
+    /// Mean over the mask's pixels.
+    Mask,
+    /// The crop to the mask's bounding box (SPIn-NeRF).
+    Bbox,
+    /// The whole image.
+    Full,
+}
+
+#[derive(Clone, Debug)]
+pub struct EvalConfig {
+    pub renders: PathBuf,
+    pub gt: PathBuf,
+    pub masks: PathBuf,
+    /// Mask values that count; empty: every nonzero value.
+    pub labels: Vec<u8>,
+    pub protocol: Protocol,
+    /// A `cogeo synth` dataset: never-seen / seen-elsewhere subsets, leftover score, depth error
+    /// and floaters.
+    pub data: Option<PathBuf>,
+    /// Rendered depth (camera z), `<name>.exr` per view, for the depth error.
+    pub depth: Option<PathBuf>,
+    /// The edited scene, for the floater score.
+    pub scene: Option<PathBuf>,
+    /// Floater distance threshold, relative to the true depth.
+    pub tau: f64,
+    /// Leftover score: RGB distance margin.
+    pub leftover_margin: f32,
+    pub lpips: Option<PathBuf>,
+    pub fid: Option<PathBuf>,
+}
+
+fn load_mask(path: &Path, labels: &[u8], w: u32, h: u32) -> Result<Vec<bool>> {
+    let img = image::open(path).with_context(|| format!("{}: cannot read mask", path.display()))?.to_luma8();
+    if img.dimensions() != (w, h) {
+        bail!("{}: mask is {}x{}, the render is {w}x{h}", path.display(), img.width(), img.height());
+    }
+    Ok(img.into_raw().iter().map(|&v| if labels.is_empty() { v != 0 } else { labels.contains(&v) }).collect())
+}
+
+fn load_same_size(path: &Path, w: u32, h: u32, what: &str) -> Result<Vec<f32>> {
+    let (iw, ih, img) = load_rgb(path)?;
+    if (iw, ih) != (w, h) {
+        bail!("{}: {what} is {iw}x{ih}, the render is {w}x{h}", path.display());
+    }
+    Ok(img)
+}
+
+fn image_stems(dir: &Path) -> Result<Vec<String>> {
+    let mut stems: Vec<String> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot read the folder", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| ["png", "jpg", "jpeg"].contains(&e.to_lowercase().as_str()))
+        })
+        .filter_map(|p| p.file_stem().and_then(|s| s.to_str()).map(str::to_string))
+        .collect();
+    stems.sort();
+    stems.dedup();
+    if stems.is_empty() {
+        bail!("{}: no PNG/JPEG images", dir.display());
+    }
+    Ok(stems)
+}
+
+fn mean_of(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let v: Vec<f64> = values.filter(|x| x.is_finite()).collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+fn mean_scores(s: &[Option<Scores>]) -> Value {
+    let present: Vec<&Scores> = s.iter().flatten().collect();
+    if present.is_empty() {
+        return Value::Null;
+    }
+    json!({
+        "psnr": mean_of(present.iter().map(|x| x.psnr)),
+        "ssim": mean_of(present.iter().map(|x| x.ssim)),
+        "views": present.len(),
+    })
+}
+
+fn not_computed(why: &str) -> Value {
+    json!(format!("not computed ({why})"))
+}
+
+/// Runs the evaluation; returns the metrics JSON.
+pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
+    let mut lpips = cfg.lpips.as_deref().map(Lpips::load).transpose()?;
+    let mut fid = cfg.fid.as_deref().map(FidFeatures::load).transpose()?;
+    let stems = image_stems(&cfg.renders)?;
+    let mut views = Vec::new();
+    let (mut m_mask, mut m_bbox, mut m_full, mut m_unseen, mut m_seen) = (vec![], vec![], vec![], vec![], vec![]);
+    let (mut leftovers, mut lp_bbox, mut lp_full) = (vec![], vec![], vec![]);
+    let (mut feat_r, mut feat_g) = (vec![], vec![]);
+    let (mut d_rel, mut d_sq, mut d_n) = (0f64, 0f64, 0usize);
+    for stem in &stems {
+        let rpath = find_image(&cfg.renders, stem).unwrap();
+        let (w, h, render) = load_rgb(&rpath)?;
+        let (wu, hu) = (w as usize, h as usize);
+        let gpath = find_image(&cfg.gt, stem)
+            .ok_or_else(|| anyhow!("{}: no ground truth image for render {stem}", cfg.gt.display()))?;
+        let gt = load_same_size(&gpath, w, h, "ground truth")?;
+        let mpath = find_image(&cfg.masks, stem)
+            .ok_or_else(|| anyhow!("{}: no mask for render {stem}", cfg.masks.display()))?;
+        let mask = load_mask(&mpath, &cfg.labels, w, h)?;
+        let (sm, sb, sf) = (
+            mask_scores(&render, &gt, &mask, wu, hu),
+            bbox_scores(&render, &gt, &mask, wu, hu),
+            full_scores(&render, &gt, wu, hu),
+        );
+        let mut view = json!({ "name": stem, "mask_pixels": mask.iter().filter(|&&m| m).count(), "mask": sm, "bbox": sb, "full": sf });
+        m_mask.push(sm);
+        m_bbox.push(sb);
+        m_full.push(sf);
+        if let Some(data) = &cfg.data {
+            let upath = data.join(format!("unseen_mask/{stem}.png"));
+            let unseen = load_mask(&upath, &[], w, h)?;
+            let inside: Vec<bool> = mask.iter().zip(&unseen).map(|(&m, &u)| m && u).collect();
+            let elsewhere: Vec<bool> = mask.iter().zip(&unseen).map(|(&m, &u)| m && !u).collect();
+            let (su, se) = (mask_scores(&render, &gt, &inside, wu, hu), mask_scores(&render, &gt, &elsewhere, wu, hu));
+            view["never_seen"] = json!(su);
+            view["seen_elsewhere"] = json!(se);
+            m_unseen.push(su);
+            m_seen.push(se);
+            let ipath = find_image(&data.join("images"), stem)
+                .ok_or_else(|| anyhow!("{}: no image {stem} (with the objects)", data.join("images").display()))?;
+            let with_objects = load_same_size(&ipath, w, h, "image")?;
+            let left = leftover_fraction(&render, &with_objects, &gt, &mask, cfg.leftover_margin);
+            view["leftover"] = json!(left);
+            leftovers.extend(left);
+            if let Some(ddir) = &cfg.depth {
+                let dpath = ddir.join(format!("{stem}.exr"));
+                let (dw, dh, depth) = crate::io::read_exr_channel(&dpath, None)?;
+                let tpath = data.join(format!("depth_background/{stem}.exr"));
+                let (tw, th, truth) = crate::io::read_exr_channel(&tpath, None)?;
+                if (dw, dh) != (w, h) || (tw, th) != (w, h) {
+                    bail!("{} / {}: depth size differs from the render's {w}x{h}", dpath.display(), tpath.display());
+                }
+                for i in (0..mask.len()).filter(|&i| mask[i] && truth[i] > 0.0 && depth[i] > 0.0) {
+                    let e = depth[i] as f64 - truth[i] as f64;
+                    d_rel += e.abs() / truth[i] as f64;
+                    d_sq += e * e;
+                    d_n += 1;
+                }
+            }
+        }
+        if let Some(l) = &mut lpips {
+            let d = l.distance(&render, &gt, wu, hu)?;
+            view["lpips_full"] = json!(d);
+            lp_full.push(d);
+            if let Some(r) = crate::complete::image::bounding_box(&mask, wu) {
+                use crate::complete::image::crop;
+                let b = l.distance(&crop(&render, wu, hu, 3, r), &crop(&gt, wu, hu, 3, r), r.width(), r.height())?;
+                view["lpips_bbox"] = json!(b);
+                lp_bbox.push(b);
+            }
+        }
+        if let Some(f) = &mut fid {
+            feat_r.push(f.features(&render, wu, hu)?);
+            feat_g.push(f.features(&gt, wu, hu)?);
+        }
+        views.push(view);
+    }
+    let headline = match cfg.protocol {
+        Protocol::Mask => mean_scores(&m_mask),
+        Protocol::Bbox => mean_scores(&m_bbox),
+        Protocol::Full => mean_scores(&m_full),
+    };
+    let no_data = "no --data synth dataset given";
+    let mut out = json!({
+        "renders": cfg.renders,
+        "gt": cfg.gt,
+        "masks": cfg.masks,
+        "labels": cfg.labels,
+        "protocol": cfg.protocol,
+        "headline": headline,
+        "mask": mean_scores(&m_mask),
+        "bbox": mean_scores(&m_bbox),
+        "full": mean_scores(&m_full),
+        "never_seen": if cfg.data.is_some() { mean_scores(&m_unseen) } else { not_computed(no_data) },
+        "seen_elsewhere": if cfg.data.is_some() { mean_scores(&m_seen) } else { not_computed(no_data) },
+        "leftover": if cfg.data.is_some() { json!(mean_of(leftovers.into_iter())) } else { not_computed(no_data) },
+        "views": views,
+    });
+    out["depth"] = match (&cfg.data, &cfg.depth) {
+        (Some(_), Some(_)) if d_n > 0 => {
+            json!({ "abs_rel": d_rel / d_n as f64, "rmse": (d_sq / d_n as f64).sqrt(), "pixels": d_n })
+        }
+        (Some(_), Some(_)) => not_computed("no mask pixel with valid depth"),
+        _ => not_computed("needs --data and --depth"),
+    };
+    out["floaters"] = match (&cfg.data, &cfg.scene) {
+        (Some(data), Some(scene_path)) => {
+            let scene = crate::scene::ply::read_ply(scene_path)?;
+            let ds = crate::train::dataset::load(data, "images")?;
+            let (mut cams, mut depths, mut regions) = (vec![], vec![], vec![]);
+            for v in ds.train.iter().chain(&ds.test) {
+                let c = &v.camera;
+                let (_, _, d) =
+                    crate::io::read_exr_channel(&data.join(format!("depth_background/{}.exr", c.name)), None)?;
+                let mpath = find_image(&data.join("object_mask"), &c.name)
+                    .ok_or_else(|| anyhow!("{}: no object mask for {}", data.join("object_mask").display(), c.name))?;
+                regions.push(load_mask(&mpath, &cfg.labels, c.width, c.height)?);
+                depths.push(d);
+                cams.push(c.clone());
+            }
+            let (score, count) = floater_score(&scene, &cams, &depths, &regions, cfg.tau);
+            json!({ "score": score, "gaussians": count, "tau": cfg.tau, "views": cams.len() })
+        }
+        _ => not_computed("needs --data and --scene"),
+    };
+    out["lpips"] = if lpips.is_some() {
+        json!({ "bbox": mean_of(lp_bbox.into_iter()), "full": mean_of(lp_full.into_iter()), "model": cfg.lpips })
+    } else {
+        not_computed("no --lpips-model given")
+    };
+    out["fid"] = if fid.is_some() {
+        match frechet_distance(&feat_r, &feat_g) {
+            Some(d) => json!({ "value": d, "images": feat_r.len(), "model": cfg.fid }),
+            None => not_computed("FID needs at least two images per set"),
+        }
+    } else {
+        not_computed("no --fid-model given")
+    };
+    Ok(out)
+}
