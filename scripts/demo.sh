@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The main job on built-in data: renders the built-in default scene from an orbit of cameras into
-# demo_out/. Installs what is missing first (scripts/setup.sh). Extra arguments go to `cogeo demo`.
+# The main job on built-in data: generates a synthetic multi-object scene, trains it, tags it,
+# removes two objects and evaluates against the exact ground truth, into demo_out/.
+# Installs what is missing first (scripts/setup.sh). Extra arguments go to `cogeo demo` (--quick).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"

@@ -223,3 +223,29 @@ mod tests {
         assert!((cam.fy * pc[1] / pc[2] + cam.cy - 30.5).abs() < 1e-9);
     }
 }
+
+/// The Gaussian-Grouping-style fill used as a baseline: one new Gaussian at each removed
+/// Gaussian's position, copying every other attribute (scale, rotation, opacity, color) from its
+/// nearest remaining Gaussian. No depth, no inpainted colors: the refinement that follows has to
+/// do the rest.
+pub fn nearest_copies(remaining: &GaussianScene, removed_means: &[[f32; 3]]) -> GaussianScene {
+    let mut out = GaussianScene { sh_degree: remaining.sh_degree, ..Default::default() };
+    if remaining.is_empty() {
+        return out;
+    }
+    let mut tree: KdTree<f64, 3> = KdTree::new();
+    for (i, p) in remaining.means.iter().enumerate() {
+        tree.add(&p.map(|v| v as f64), i as u64);
+    }
+    let k = remaining.sh_coeffs() * 3;
+    for p in removed_means {
+        let j = tree.nearest_one::<SquaredEuclidean>(&p.map(|v| v as f64)).item as usize;
+        out.means.push(*p);
+        out.normals.push([0.0; 3]);
+        out.log_scales.push(remaining.log_scales[j]);
+        out.quats.push(remaining.quats[j]);
+        out.opacity_logits.push(remaining.opacity_logits[j]);
+        out.sh.extend_from_slice(&remaining.sh[j * k..(j + 1) * k]);
+    }
+    out
+}

@@ -88,3 +88,12 @@ pub fn read_exr_channel(path: &Path, name: Option<&str>) -> Result<(u32, u32, Ve
     let values = channel.sample_data.values_as_f32().collect();
     Ok((layer.size.0 as u32, layer.size.1 as u32, values))
 }
+
+/// Peak resident memory of this process in MiB (VmHWM of /proc/self/status; Linux only). GPU
+/// memory on lavapipe is host memory, so on the CPU this covers it too.
+pub fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}

@@ -31,6 +31,17 @@ pub struct Stages {
     pub refine: bool,
 }
 
+/// How the new Gaussians behind the removed objects are made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Fill {
+    /// CoGeo-GS: back-project the completed depth of every view, fuse, prune (fuse.rs).
+    Depth,
+    /// Baseline (Gaussian-Grouping-style): each removed Gaussian is replaced by a copy of its
+    /// nearest remaining Gaussian, at its own position.
+    NearestCopy,
+}
+
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct RemoveOptions {
     pub labels: Vec<u8>,
@@ -41,6 +52,7 @@ pub struct RemoveOptions {
     /// Hole pixels the remaining Gaussians cover with at least this alpha keep their render.
     pub keep_alpha: f32,
     pub stages: Stages,
+    pub fill: Fill,
     pub fuse: FuseConfig,
     /// None: from the patch spacing s (near 2 s, radius 3 s, 4 neighbours).
     pub prune: Option<PruneConfig>,
@@ -56,6 +68,7 @@ impl Default for RemoveOptions {
             dilate: 2.0,
             keep_alpha: 0.9,
             stages: Stages { complete: true, prune: true, refine: true },
+            fill: Fill::Depth,
             fuse: FuseConfig::default(),
             prune: None,
             refine: RefineConfig::default(),
@@ -229,30 +242,39 @@ pub fn remove(
             progress("complete", i + 1, cameras.len());
         }
         lap("complete", &mut timings);
-        // 4. fusion and pruning
-        let fviews: Vec<FuseView> = views
-            .iter()
-            .zip(cameras)
-            .map(|(v, c)| FuseView { camera: c, rgb: &v.inpainted, depth: &v.depth, fill: &v.fill })
-            .collect();
-        let (points, stats) = fuse::fuse_points(&fviews, &opts.fuse);
-        let patch = fuse::patch_gaussians(&points, result.sh_degree, opts.fuse.opacity);
-        if opts.stages.prune && !patch.is_empty() {
-            let cfg = opts.prune.clone().unwrap_or_else(|| {
-                let mut fp: Vec<f64> = points.iter().map(|p| p.footprint).collect();
-                fp.sort_by(|a, b| a.total_cmp(b));
-                let s = fp[fp.len() / 2];
-                PruneConfig { near: 2.0 * s, radius: 3.0 * s, min_neighbours: 4 }
-            });
-            let prune = fuse::prune_mask(&result.means, &patch.means, &cfg);
-            pruned = prune.iter().filter(|&&p| p).count();
-            let keep: Vec<bool> = prune.iter().map(|&p| !p).collect();
-            result = result.subset(&keep);
-            prune_used = Some(cfg);
+        // 4. fusion and pruning (or the nearest-copy baseline)
+        if opts.fill == Fill::NearestCopy {
+            let removed_means: Vec<[f32; 3]> =
+                scene.means.iter().zip(&removed).filter(|(_, &r)| r).map(|(m, _)| *m).collect();
+            let patch = fuse::nearest_copies(&result, &removed_means);
+            result.append(&patch)?;
+            fuse_stats = Some(serde_json::json!({ "fill": "nearest-copy", "patch_gaussians": patch.len() }));
+        } else {
+            let fviews: Vec<FuseView> = views
+                .iter()
+                .zip(cameras)
+                .map(|(v, c)| FuseView { camera: c, rgb: &v.inpainted, depth: &v.depth, fill: &v.fill })
+                .collect();
+            let (points, stats) = fuse::fuse_points(&fviews, &opts.fuse);
+            let patch = fuse::patch_gaussians(&points, result.sh_degree, opts.fuse.opacity);
+            if opts.stages.prune && !patch.is_empty() {
+                let cfg = opts.prune.clone().unwrap_or_else(|| {
+                    let mut fp: Vec<f64> = points.iter().map(|p| p.footprint).collect();
+                    fp.sort_by(|a, b| a.total_cmp(b));
+                    let s = fp[fp.len() / 2];
+                    PruneConfig { near: 2.0 * s, radius: 3.0 * s, min_neighbours: 4 }
+                });
+                let prune = fuse::prune_mask(&result.means, &patch.means, &cfg);
+                pruned = prune.iter().filter(|&&p| p).count();
+                let keep: Vec<bool> = prune.iter().map(|&p| !p).collect();
+                result = result.subset(&keep);
+                prune_used = Some(cfg);
+            }
+            result.append(&patch)?;
+            fuse_stats = Some(serde_json::json!({ "stats": stats, "patch_gaussians": patch.len() }));
         }
-        result.append(&patch)?;
-        fuse_stats = Some(serde_json::json!({ "stats": stats, "patch_gaussians": patch.len() }));
         lap("fuse", &mut timings);
+
         // 5. refinement
         if opts.stages.refine {
             let targets: Vec<Vec<f32>> = views.iter().map(|v| v.inpainted.clone()).collect();

@@ -313,3 +313,30 @@ fn statue_colmap_model_loads_and_points_project_into_the_views() {
         assert!(inside * 2 > model.points.len(), "{}: only {inside} points project inside", cam.name);
     }
 }
+
+/// `render --builtin` writes the built-in scene and its cameras beside the renders; rendering
+/// those files again gives the same pixels (the image is a function of scene and camera).
+#[test]
+fn render_builtin_writes_a_scene_that_renders_the_same_again() {
+    let dir = tempdir("builtin");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let (code, err) =
+        cogeo(&["render", "--builtin", "--views", "2", "--width", "48", "--height", "32", "--out", s(&a)]);
+    assert_eq!(code, 0, "{err}");
+    let cams = read_cameras_json(&a.join("cameras.json")).unwrap();
+    assert_eq!(cams.len(), 2);
+    let (code, err) =
+        cogeo(&["render", "--scene", s(&a.join("scene.ply")), "--cameras", s(&a.join("cameras.json")), "--out", s(&b)]);
+    assert_eq!(code, 0, "{err}");
+    for c in &cams {
+        let first = image::open(a.join(format!("{}.png", c.name))).unwrap().to_rgb8();
+        let again = image::open(b.join(format!("{}.png", c.name))).unwrap().to_rgb8();
+        assert_eq!(first.dimensions(), (48, 32));
+        assert!(first.pixels().any(|p| p.0 != [0, 0, 0]), "{}: empty render", c.name);
+        assert_eq!(first, again);
+    }
+    // --builtin and --scene together are refused
+    let (code, _) = cogeo(&["render", "--builtin", "--scene", s(&a.join("scene.ply")), "--out", s(&b)]);
+    assert_ne!(code, 0);
+    std::fs::remove_dir_all(&dir).ok();
+}

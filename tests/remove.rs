@@ -14,56 +14,50 @@ fn masked_psnr(r: &serde_json::Value) -> f64 {
     r["held_out_vs_ground_truth"]["masked_psnr"].as_f64().unwrap()
 }
 
+/// `cogeo demo --quick` (synth with 3 objects, 500 training iterations, vote tags, objects 1 and 2
+/// removed at once, evaluation), then more `cogeo remove` runs on the demo's tagged scene.
 #[test]
-fn removing_two_objects_beats_removal_only_and_keeps_the_background() {
+fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
     let exe = env!("CARGO_BIN_EXE_cogeo");
     let root = std::env::temp_dir().join(format!("cogeo_remove_{}", std::process::id()));
     let path = |p: &str| root.join(p).to_string_lossy().into_owned();
     let run = |args: &[&str]| run_cogeo(exe, args);
-    let data = path("data");
-    run(&[
-        "synth",
-        "--out",
-        &data,
-        "--width",
-        "64",
-        "--height",
-        "48",
-        "--views",
-        "16",
-        "--objects",
-        "3",
-        "--seed",
-        "2",
-    ]);
-    let trained = path("trained");
-    run(&[
-        "train",
-        "--data",
-        &data,
-        "--out",
-        &trained,
-        "--iters",
-        "500",
-        "--sh-degree",
-        "1",
-        "--no-densify",
-        "--checkpoint-every",
-        "0",
-    ]);
-    let tagged = path("tagged.ply");
-    let scene = format!("{trained}/scene.ply");
-    run(&["tag", "--scene", &scene, "--data", &data, "--masks", "object_mask", "--method", "vote", "--out", &tagged]);
+    let demo = path("demo");
+    run(&["demo", "--quick", "--out", &demo]);
+    let m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root.join("demo/metrics.json")).unwrap()).unwrap();
+    let (ours, only) = (&m["cogeo"], &m["removal_only"]);
+    let (f, o) = (ours["mask"]["psnr"].as_f64().unwrap(), only["mask"]["psnr"].as_f64().unwrap());
+    eprintln!("demo: held-out masked PSNR cogeo {f:.2} dB, removal only {o:.2} dB");
+    assert!(f > o + 0.5, "demo: full pipeline {f:.2} dB does not beat removal only {o:.2} dB");
+    // the objects are gone from the held-out views: less of them is left than after removal only
+    assert!(ours["leftover"].as_f64().unwrap() < only["leftover"].as_f64().unwrap());
+    let views = ours["views"].as_array().unwrap().len();
+    assert_eq!(views, 2);
+    assert_eq!(std::fs::read_dir(root.join("demo/strips")).unwrap().count(), views);
+    let sheet = image::open(root.join("demo/contact_sheet.png")).unwrap();
+    assert!(sheet.width() >= 4 * 64 && sheet.height() >= 2 * 48);
+    let md = std::fs::read_to_string(root.join("demo/report.md")).unwrap();
+    assert!(md.contains("| cogeo (full pipeline) |") && md.contains("contact_sheet.png"));
+    // a non-empty folder that no demo wrote is refused, not overwritten
+    std::fs::create_dir_all(root.join("mine")).unwrap();
+    std::fs::write(root.join("mine/keep.txt"), "x").unwrap();
+    let refused = std::process::Command::new(exe).args(["demo", "--quick", "--out", &path("mine")]).output().unwrap();
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("not empty"));
+    assert!(root.join("mine/keep.txt").exists());
+
+    let data = format!("{demo}/data");
+    let tagged = format!("{demo}/tagged.ply");
     let remove = |out: &str, extra: &[&str]| {
         let out = path(out);
         run(&[&["remove", "--scene", &tagged, "--data", &data, "--labels", "1,2", "--out", &out][..], extra].concat());
         report(&out)
     };
-    let full = remove("full", &[]);
-    let only = remove("only", &["--removal-only"]);
-    let (f, o) = (masked_psnr(&full), masked_psnr(&only));
-    eprintln!("held-out masked PSNR: full {f:.2} dB, removal only {o:.2} dB");
-    assert!(f > o + 0.5, "full pipeline {f:.2} dB does not beat removal only {o:.2} dB");
+    let full = report(&format!("{demo}/removal"));
+    let only = report(&format!("{demo}/removal_only"));
+    // cogeo remove's own scores agree with the demo's evaluation
+    assert!((masked_psnr(&full) - f).abs() < 0.05 && (masked_psnr(&only) - o).abs() < 0.05);
     // the background outside the dilated holes stays as it was rendered
     let bg = full["background_psnr_vs_original"]["mean"].as_f64().unwrap();
     assert!(bg >= 35.0, "background PSNR vs the original render {bg:.2} dB");
@@ -79,10 +73,10 @@ fn removing_two_objects_beats_removal_only_and_keeps_the_background() {
     // completed depth is closer to the true background than the raw render's depth would be
     assert!(full["fill_depth_vs_ground_truth"]["abs_rel"].as_f64().unwrap() < 0.2);
     // outputs: the clean scene and per-view images
-    let clean = cogeo::scene::ply::read_ply(&root.join("full/scene.ply")).unwrap();
+    let clean = cogeo::scene::ply::read_ply(&root.join("demo/removal/scene.ply")).unwrap();
     assert_eq!(clean.len() as u64, g["output"].as_u64().unwrap());
     for sub in ["before", "after", "removed", "inpainted", "mask", "depth", "test_before", "test_after"] {
-        let n = std::fs::read_dir(root.join("full").join(sub)).unwrap().count();
+        let n = std::fs::read_dir(root.join("demo/removal").join(sub)).unwrap().count();
         assert!(n > 0, "{sub}/ is empty");
     }
     // a label nobody carries is an error naming it

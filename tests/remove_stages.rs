@@ -188,3 +188,28 @@ fn onnx_depth_priors_are_anchored_in_their_own_space() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// The nearest-copy baseline: each new Gaussian sits at its removed Gaussian's position and
+/// carries every other attribute of the nearest remaining one.
+#[test]
+fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
+    use cogeo::scene::GaussianScene;
+    let mut rest = GaussianScene { sh_degree: 1, ..Default::default() };
+    for (i, p) in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0]].iter().enumerate() {
+        rest.means.push(*p);
+        rest.normals.push([0.0; 3]);
+        rest.log_scales.push([i as f32; 3]);
+        rest.quats.push([1.0, i as f32, 0.0, 0.0]);
+        rest.opacity_logits.push(-(i as f32));
+        rest.sh.extend((0..12).map(|k| (10 * i + k) as f32));
+    }
+    let removed = [[0.9f32, 0.2, 0.0], [0.1, 1.6, 0.3], [-0.2, 0.1, 0.0]];
+    let copies = cogeo::fuse::nearest_copies(&rest, &removed);
+    assert_eq!(copies.means, removed.to_vec());
+    for (k, nearest) in [1usize, 2, 0].into_iter().enumerate() {
+        assert_eq!(copies.log_scales[k], rest.log_scales[nearest]);
+        assert_eq!(copies.quats[k], rest.quats[nearest]);
+        assert_eq!(copies.opacity_logits[k], rest.opacity_logits[nearest]);
+        assert_eq!(copies.sh[k * 12..(k + 1) * 12], rest.sh[nearest * 12..(nearest + 1) * 12]);
+    }
+}

@@ -1,0 +1,309 @@
+//! The removal results table: a fixed set of `cogeo synth` scenes (one object, and several objects
+//! removed at once), each trained and tagged once, then removed with the full pipeline and with
+//! each ablation / baseline. Scored on the held-out views against the exact object-free ground
+//! truth with `cogeo eval`.
+//!
+//!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
+//!                                  --width 64 --height 48 --views 16
+//!                                  --lpips-model lpips.onnx --fid-model inception.onnx --no-readme]
+//!
+//! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
+//! removal only, cogeo, ground truth on one held-out view), and replaces the table between the
+//! `removal-table` markers of README.md (unless --no-readme).
+
+#[path = "common.rs"]
+mod common;
+
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+struct SceneSpec {
+    name: &'static str,
+    objects: usize,
+    labels: &'static str,
+    seed: u64,
+}
+
+const SCENES: [SceneSpec; 3] = [
+    SceneSpec { name: "one", objects: 1, labels: "1", seed: 5 },
+    SceneSpec { name: "two-of-three", objects: 3, labels: "1,2", seed: 2 },
+    SceneSpec { name: "three-of-four", objects: 4, labels: "1,2,3", seed: 7 },
+];
+
+/// (name, tagging method, extra `cogeo remove` flags)
+const VARIANTS: [(&str, &str, &[&str]); 6] = [
+    ("cogeo (full)", "vote", &[]),
+    ("removal only", "vote", &["--removal-only"]),
+    ("no depth guidance", "vote", &["--no-depth-guidance"]),
+    ("2D-projection selection", "project", &[]),
+    ("no refinement", "vote", &["--no-refine"]),
+    ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),
+];
+
+fn cogeo(args: &[String]) {
+    let t = std::time::Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_cogeo")).args(args).output().expect("cannot run cogeo");
+    if !out.status.success() {
+        panic!("cogeo {} failed:\n{}", args.join(" "), String::from_utf8_lossy(&out.stderr));
+    }
+    eprintln!("  {:>6.1} s  cogeo {}", t.elapsed().as_secs_f64(), args.join(" "));
+}
+
+fn read_json(p: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))).unwrap()
+}
+
+fn s(v: &[&str]) -> Vec<String> {
+    v.iter().map(|x| x.to_string()).collect()
+}
+
+fn num(v: &Value, digits: usize) -> String {
+    match v.as_f64() {
+        Some(x) if x.is_finite() => format!("{x:.digits$}"),
+        _ => "n/a".into(),
+    }
+}
+
+fn main() {
+    let args = common::args();
+    let arg = |n: &str, d: &str| common::arg(&args, n).unwrap_or_else(|| d.to_string());
+    let wanted: Vec<String> =
+        arg("--scenes", "one,two-of-three,three-of-four").split(',').map(str::to_string).collect();
+    let (iters, width, height, views) =
+        (arg("--iters", "500"), arg("--width", "64"), arg("--height", "48"), arg("--views", "16"));
+    let lpips = common::arg(&args, "--lpips-model");
+    let fid = common::arg(&args, "--fid-model");
+    let root = std::env::temp_dir().join(format!("cogeo_bench_removal_{}", std::process::id()));
+    let p = |x: &Path| x.to_string_lossy().into_owned();
+    let mut rows = Vec::new();
+    let mut device = String::new();
+    let mut example: Option<(PathBuf, PathBuf, PathBuf, &str)> = None;
+    for spec in SCENES.iter().filter(|s| wanted.iter().any(|w| w == s.name)) {
+        eprintln!("scene {} ({} object(s), removing {})", spec.name, spec.objects, spec.labels);
+        let dir = root.join(spec.name);
+        let data = dir.join("data");
+        cogeo(&s(&[
+            "synth",
+            "--out",
+            &p(&data),
+            "--width",
+            &width,
+            "--height",
+            &height,
+            "--views",
+            &views,
+            "--objects",
+            &spec.objects.to_string(),
+            "--seed",
+            &spec.seed.to_string(),
+        ]));
+        let train = dir.join("train");
+        cogeo(&s(&[
+            "train",
+            "--data",
+            &p(&data),
+            "--out",
+            &p(&train),
+            "--iters",
+            &iters,
+            "--sh-degree",
+            "1",
+            "--no-densify",
+            "--checkpoint-every",
+            "0",
+            "--seed",
+            &spec.seed.to_string(),
+        ]));
+        let train_metrics = read_json(&train.join("metrics.json"));
+        for method in ["vote", "project"] {
+            cogeo(&s(&[
+                "tag",
+                "--scene",
+                &p(&train.join("scene.ply")),
+                "--data",
+                &p(&data),
+                "--masks",
+                "object_mask",
+                "--method",
+                method,
+                "--out",
+                &p(&dir.join(format!("tagged_{method}.ply"))),
+            ]));
+        }
+        for (k, (variant, method, extra)) in VARIANTS.iter().enumerate() {
+            let out = dir.join(format!("variant_{k}"));
+            let mut a = s(&[
+                "remove",
+                "--scene",
+                &p(&dir.join(format!("tagged_{method}.ply"))),
+                "--data",
+                &p(&data),
+                "--labels",
+                spec.labels,
+                "--out",
+                &p(&out),
+            ]);
+            a.extend(s(&extra[..]));
+            cogeo(&a);
+            let metrics_path = out.join("metrics.json");
+            let mut e = s(&[
+                "eval",
+                "--renders",
+                &p(&out.join("test_after")),
+                "--gt",
+                &p(&data.join("gt_background")),
+                "--masks",
+                &p(&data.join("object_mask")),
+                "--labels",
+                spec.labels,
+                "--data",
+                &p(&data),
+                "--scene",
+                &p(&out.join("scene.ply")),
+                "--out",
+                &p(&metrics_path),
+            ]);
+            if let Some(m) = &lpips {
+                e.extend(s(&["--lpips-model", m]));
+            }
+            if let Some(m) = &fid {
+                e.extend(s(&["--fid-model", m]));
+            }
+            cogeo(&e);
+            let report = read_json(&out.join("report.json"));
+            device = report["device"].as_str().unwrap_or("?").to_string();
+            let m = read_json(&metrics_path);
+            rows.push(json!({
+                "scene": spec.name, "removed_labels": spec.labels, "variant": variant,
+                "train_test_psnr": train_metrics["test"]["psnr"],
+                "metrics": m, "stage_seconds": report["seconds"], "total_seconds": report["total_seconds"],
+                "peak_rss_mib": report["peak_rss_mib"], "gaussians": report["gaussians"],
+                "background_psnr_vs_original": report["background_psnr_vs_original"]["mean"],
+            }));
+        }
+        // VARIANTS[0] is the full pipeline, VARIANTS[1] removal only
+        if spec.name == "two-of-three" || example.is_none() {
+            example = Some((data.clone(), dir.join("variant_1"), dir.join("variant_0"), spec.name));
+        }
+    }
+    // the table
+    let mut md = format!(
+        "Removal on `cogeo synth` scenes ({width}x{height}, {views} views, every 8th held out; {iters} training \
+         iterations; vote tags unless noted), `cargo bench --bench removal`, on {device}. Held-out views against \
+         the exact object-free ground truth: PSNR/SSIM inside the removed objects' silhouettes (mask), on the \
+         silhouettes' bounding box (bbox), on the never-seen part of the mask; leftover = share of mask pixels that \
+         still look like the object; floaters = opacity-weighted count of Gaussians off the true surface by more than \
+         5 % in every view of the mask; time = the whole `cogeo remove` run; memory = its peak resident set.\n\n\
+         | scene | variant | masked PSNR | masked SSIM | bbox PSNR | never-seen PSNR | leftover | floaters | LPIPS (bbox) | time s | peak MiB |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    );
+    for r in &rows {
+        let m = &r["metrics"];
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r["scene"].as_str().unwrap(),
+            r["variant"].as_str().unwrap(),
+            num(&m["mask"]["psnr"], 2),
+            num(&m["mask"]["ssim"], 3),
+            num(&m["bbox"]["psnr"], 2),
+            num(&m["never_seen"]["psnr"], 2),
+            num(&m["leftover"], 3),
+            num(&m["floaters"]["score"], 1),
+            num(&m["lpips"]["bbox"], 3),
+            num(&r["total_seconds"], 1),
+            num(&r["peak_rss_mib"], 0),
+        );
+    }
+    md += "\nMean over the scenes:\n\n| variant | masked PSNR | masked SSIM | bbox PSNR |\n|---|---:|---:|---:|\n";
+    for (variant, _, _) in VARIANTS.iter() {
+        let sel: Vec<&Value> = rows.iter().filter(|r| r["variant"] == *variant).collect();
+        let mean = |f: &dyn Fn(&Value) -> Option<f64>| {
+            let v: Vec<f64> = sel.iter().filter_map(|r| f(&r["metrics"])).collect();
+            if v.is_empty() {
+                json!(null)
+            } else {
+                json!(v.iter().sum::<f64>() / v.len() as f64)
+            }
+        };
+        md += &format!(
+            "| {variant} | {} | {} | {} |\n",
+            num(&mean(&|m| m["mask"]["psnr"].as_f64()), 2),
+            num(&mean(&|m| m["mask"]["ssim"].as_f64()), 3),
+            num(&mean(&|m| m["bbox"]["psnr"].as_f64()), 2)
+        );
+    }
+    md += "\nSeconds per stage of the full pipeline:\n\n| scene | select | masks | complete | fuse | refine | render |\n|---|---:|---:|---:|---:|---:|---:|\n";
+    for r in rows.iter().filter(|r| r["variant"] == "cogeo (full)") {
+        let t = &r["stage_seconds"];
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} |\n",
+            r["scene"].as_str().unwrap(),
+            num(&t["select"], 2),
+            num(&t["masks"], 2),
+            num(&t["complete"], 2),
+            num(&t["fuse"], 2),
+            num(&t["refine"], 1),
+            num(&t["render"], 2)
+        );
+    }
+    println!("{md}");
+    let slug: String = device
+        .to_lowercase()
+        .split(|c: char| !c.is_ascii_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .take(3)
+        .collect::<Vec<_>>()
+        .join("-");
+    common::write_json(
+        &common::results_path(&format!("removal-{slug}.json")),
+        &json!({ "device": device, "rows": rows }),
+    );
+    let md_path = common::results_path(&format!("removal-{slug}.md"));
+    std::fs::write(&md_path, &md).unwrap();
+    println!("wrote {}", md_path.display());
+    // the example image: input | removal only | cogeo | ground truth, first held-out view
+    let mut image_line = String::new();
+    if let Some((data, only, full, scene)) = &example {
+        let first = read_json(&full.join("metrics.json"))["views"][0]["name"].as_str().unwrap().to_string();
+        let imgs: Vec<image::RgbImage> =
+            [data.join("images"), only.join("test_after"), full.join("test_after"), data.join("gt_background")]
+                .iter()
+                .map(|d| image::open(d.join(format!("{first}.png"))).unwrap().to_rgb8())
+                .collect();
+        let (w, h) = imgs[0].dimensions();
+        let k = 3;
+        let mut strip = image::RgbImage::from_pixel(4 * w * k + 6, h * k, image::Rgb([255, 255, 255]));
+        for (i, im) in imgs.iter().enumerate() {
+            for y in 0..h * k {
+                for x in 0..w * k {
+                    strip.put_pixel(i as u32 * (w * k + 2) + x, y, *im.get_pixel(x / k, y / k));
+                }
+            }
+        }
+        let path = common::results_path("removal-example.png");
+        strip.save(&path).unwrap();
+        println!("wrote {}", path.display());
+        image_line = format!(
+            "\n![input, removal only, cogeo, ground truth](bench/results/removal-example.png)\n\n\
+             Held-out view {first} of the {scene} scene: input, removal only, cogeo, ground truth.\n"
+        );
+    }
+    if !args.iter().any(|a| a == "--no-readme") {
+        let readme_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("README.md");
+        let readme = std::fs::read_to_string(&readme_path).unwrap();
+        let (begin, end) = ("<!-- removal-table:begin -->", "<!-- removal-table:end -->");
+        if let (Some(b), Some(e)) = (readme.find(begin), readme.find(end)) {
+            let new = format!("{}{begin}\n{md}{image_line}{}", &readme[..b], &readme[e..]);
+            cogeo::io::write_atomic(&readme_path, |w| {
+                use std::io::Write;
+                w.write_all(new.as_bytes()).map_err(Into::into)
+            })
+            .unwrap();
+            println!("updated the removal table in {}", readme_path.display());
+        } else {
+            println!("README.md has no removal-table markers; left as is");
+        }
+    }
+    std::fs::remove_dir_all(&root).ok();
+}
