@@ -242,8 +242,27 @@ struct TagArgs {
     /// 0 = background, 255 = ignore), or a folder of per-object subfolders holding binary masks
     /// (nonzero = object; objects numbered 1.. in sorted subfolder order). Relative paths are tried
     /// against the current directory, then inside --data.
+    #[arg(long, required_unless_present = "prompt")]
+    masks: Option<PathBuf>,
+    /// Text prompts instead of masks, comma-separated or repeated (object q = the q-th prompt):
+    /// needs --detector, --segmenter and --prompt-embeddings. The label maps made are written to
+    /// `<out>_prompt_masks/` for inspection and reuse as --masks.
+    #[arg(long, value_delimiter = ',', conflicts_with = "masks")]
+    prompt: Vec<String>,
+    /// Open-vocabulary detector (ONNX): inputs image [1,3,H,W] in [0,1] and text_embeds [Q,E];
+    /// outputs boxes [Q,K,4] (normalized x0,y0,x1,y1) and scores [Q,K].
     #[arg(long)]
-    masks: PathBuf,
+    detector: Option<PathBuf>,
+    /// Box-prompted segmenter (ONNX, SAM-style): inputs image [1,3,H,W] in [0,1] and box [1,4]
+    /// (pixels x0,y0,x1,y1); output mask_logits [1,1,H,W] (> 0 = object).
+    #[arg(long)]
+    segmenter: Option<PathBuf>,
+    /// JSON object mapping each prompt to its text embedding (from the detector's text encoder).
+    #[arg(long)]
+    prompt_embeddings: Option<PathBuf>,
+    /// A prompt's best box is used when its detection score reaches this.
+    #[arg(long, default_value_t = 0.3)]
+    box_threshold: f32,
     /// distill: identity features + classifier (cross-entropy + kNN KL); vote: closed-form blending
     /// weight vote; project: label under each Gaussian's projected center (naive baseline).
     #[arg(long, value_enum, default_value = "distill")]
@@ -872,9 +891,59 @@ fn cmd_tag(a: TagArgs) -> Result<()> {
     for w in &data.warnings {
         eprintln!("warning: {w}");
     }
-    let masks = if a.masks.is_dir() || a.masks.is_absolute() { a.masks.clone() } else { a.data.join(&a.masks) };
     let train_cams: Vec<&Camera> = data.train.iter().map(|v| &v.camera).collect();
-    let maps = labels::load(&masks, &train_cams)?;
+    let mut prompt_report = serde_json::Value::Null;
+    let (masks, maps) = match &a.masks {
+        Some(m) => {
+            let masks = if m.is_dir() || m.is_absolute() { m.clone() } else { a.data.join(m) };
+            let maps = labels::load(&masks, &train_cams)?;
+            (masks, maps)
+        }
+        None => {
+            let (Some(det), Some(seg), Some(emb)) = (&a.detector, &a.segmenter, &a.prompt_embeddings) else {
+                bail!(
+                    "text prompts need ONNX models: --detector, --segmenter and --prompt-embeddings (contracts in the \
+                     README); without them, give per-view masks with --masks"
+                );
+            };
+            let mut seg = tag::prompt::PromptSegmenter::load(det, seg, emb, &a.prompt, a.box_threshold)?;
+            let views: Vec<(&[f32], usize, usize)> = data
+                .train
+                .iter()
+                .map(|v| (v.image.as_slice(), v.camera.width as usize, v.camera.height as usize))
+                .collect();
+            let bar = progress(views.len(), "prompts");
+            let mut maps = Vec::new();
+            let mut detections = Vec::new();
+            for v in &views {
+                let (m, d) = seg.label_map(v.0, v.1, v.2)?;
+                maps.push(m);
+                detections.push(d);
+                bar.inc(1);
+            }
+            bar.finish_and_clear();
+            let maps = labels::LabelMaps { num_objects: a.prompt.len(), names: a.prompt.clone(), maps };
+            let dir = a.out.with_file_name(format!(
+                "{}_prompt_masks",
+                a.out.file_stem().and_then(|s| s.to_str()).unwrap_or("tagged")
+            ));
+            std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+            for (c, m) in train_cams.iter().zip(&maps.maps) {
+                cogeo::io::write_png(&dir.join(format!("{}.png", c.name)), c.width, c.height, image::ColorType::L8, m)?;
+            }
+            let hits: Vec<usize> =
+                (0..a.prompt.len()).map(|q| detections.iter().filter(|d| d[q].is_some()).count()).collect();
+            for (p, n) in a.prompt.iter().zip(&hits) {
+                eprintln!("prompt {p:?}: detected in {n} of {} views", views.len());
+            }
+            prompt_report = serde_json::json!({
+                "prompts": a.prompt, "detector": det, "segmenter": seg.segmenter_path(), "box_threshold": a.box_threshold,
+                "views_detected": hits, "masks_written_to": dir,
+                "detections": train_cams.iter().zip(&detections).map(|(c, d)| serde_json::json!({"view": c.name, "found": d})).collect::<Vec<_>>(),
+            });
+            (dir, maps)
+        }
+    };
     eprintln!(
         "tagging {} Gaussians with {} object label(s) from {} views ({})",
         scene.len(),
@@ -916,7 +985,7 @@ fn cmd_tag(a: TagArgs) -> Result<()> {
     // held-out evaluation where masks for the test views exist
     let test_cams: Vec<&Camera> = data.test.iter().map(|v| &v.camera).collect();
     let held_out = match labels::load(&masks, &test_cams) {
-        Ok(truth) if !test_cams.is_empty() => {
+        Ok(truth) if !test_cams.is_empty() && a.masks.is_some() => {
             let cams: Vec<Camera> = test_cams.iter().map(|c| (*c).clone()).collect();
             let (per, mean) = tag::evaluate_labels(&gpu, &scene, &tagged.tags.labels, &cams, &truth)?;
             Some(serde_json::json!({ "views": cams.len(), "miou": mean, "iou_per_label": per }))
@@ -931,6 +1000,7 @@ fn cmd_tag(a: TagArgs) -> Result<()> {
         "masks": masks,
         "labels": maps.num_objects,
         "names": maps.names,
+        "prompts": prompt_report,
         "gaussians_per_label": counts,
         "seconds": seconds,
         "final_losses": tagged.losses.map(|(o, s)| serde_json::json!({"obj": o, "space": s})),
@@ -1300,7 +1370,12 @@ fn cmd_run(a: RunArgs) -> Result<()> {
         scene: train_dir.join("scene.ply"),
         data: a.data.clone(),
         images: a.images.clone(),
-        masks: a.masks.clone(),
+        masks: Some(a.masks.clone()),
+        prompt: Vec::new(),
+        detector: None,
+        segmenter: None,
+        prompt_embeddings: None,
+        box_threshold: 0.3,
         method: a.tag_method,
         out: tagged.clone(),
         iters: a.tag_iters,

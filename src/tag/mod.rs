@@ -10,6 +10,7 @@
 
 pub mod distill;
 pub mod labels;
+pub mod prompt;
 
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
