@@ -32,10 +32,11 @@ const SCENES: [SceneSpec; 3] = [
 ];
 
 /// (name, tagging method, extra `cogeo remove` flags)
-const VARIANTS: [(&str, &str, &[&str]); 6] = [
+const VARIANTS: [(&str, &str, &[&str]); 7] = [
     ("cogeo (full)", "vote", &[]),
     ("removal only", "vote", &["--removal-only"]),
     ("no depth guidance", "vote", &["--no-depth-guidance"]),
+    ("no color transfer", "vote", &["--no-transfer"]),
     ("2D-projection selection", "project", &[]),
     ("no refinement", "vote", &["--no-refine"]),
     ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),

@@ -12,6 +12,7 @@
 //!
 //! Each stage can be switched off for ablations (`Stages`).
 
+use crate::complete::transfer::{transfer, SourceView, Transfer};
 use crate::complete::{image::dilate, Completer, ViewInputs};
 use crate::fuse::{self, FuseConfig, FuseView, PruneConfig};
 use crate::gpu::Gpu;
@@ -25,6 +26,9 @@ use std::time::Instant;
 pub struct Stages {
     /// Inpaint, complete depth and fuse new Gaussians (false: removal only).
     pub complete: bool,
+    /// Take colors of fill pixels from the captured images of the views that saw the completed
+    /// surface point (complete/transfer.rs).
+    pub transfer: bool,
     /// Prune sparse background outliers near the patch.
     pub prune: bool,
     /// Refine against the completed views.
@@ -67,7 +71,7 @@ impl Default for RemoveOptions {
             hole_threshold: 0.3,
             dilate: 2.0,
             keep_alpha: 0.9,
-            stages: Stages { complete: true, prune: true, refine: true },
+            stages: Stages { complete: true, transfer: true, prune: true, refine: true },
             fill: Fill::Depth,
             fuse: FuseConfig::default(),
             prune: None,
@@ -144,13 +148,15 @@ pub fn hole_mask(weight: &[f32], alpha: &[f32], w: usize, h: usize, threshold: f
     dilate(&raw, w, h, radius)
 }
 
-/// Runs the pipeline on `scene` (tagged: `labels` per Gaussian) with the edited `cameras`.
+/// Runs the pipeline on `scene` (tagged: `labels` per Gaussian) with the edited `cameras` and
+/// their captured images `photos` (planar RGB; empty: no color transfer).
 #[allow(clippy::too_many_arguments)]
 pub fn remove(
     gpu: &Gpu,
     scene: &GaussianScene,
     labels: &[u8],
     cameras: &[Camera],
+    photos: &[Vec<f32>],
     extent: f64,
     opts: &RemoveOptions,
     completer: &mut Completer,
@@ -161,6 +167,14 @@ pub fn remove(
     }
     if opts.labels.is_empty() {
         bail!("no labels to remove");
+    }
+    if !photos.is_empty() && photos.len() != cameras.len() {
+        bail!("{} photos for {} views", photos.len(), cameras.len());
+    }
+    for (p, c) in photos.iter().zip(cameras) {
+        if p.len() != 3 * (c.width * c.height) as usize {
+            bail!("{}: the photo's size differs from the camera's {}x{}", c.name, c.width, c.height);
+        }
     }
     let mut timings = serde_json::Map::new();
     let mut clock = Instant::now();
@@ -185,6 +199,7 @@ pub fn remove(
     let mut remaining = ViewRenderer::new(gpu, &background_scene, None)?;
     let mut views = Vec::new();
     let mut after_removal = Vec::new();
+    let mut originals = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
         let before = original.render(cam, opts.background)?;
@@ -202,6 +217,10 @@ pub fn remove(
             fill,
         });
         after_removal.push(rest);
+        // for color transfer: the objects' own footprint with a 1-pixel margin for their
+        // anti-aliased edges (the dilated hole would hide background that other views saw)
+        let footprint = hole_mask(&before.weight, &before.alpha, w, h, opts.hole_threshold, 1.0);
+        originals.push((before.depth, before.alpha, footprint));
         progress("masks", i + 1, cameras.len());
     }
     drop(original);
@@ -242,6 +261,40 @@ pub fn remove(
             progress("complete", i + 1, cameras.len());
         }
         lap("complete", &mut timings);
+        // 3b. depth-guided color transfer from the views that saw the completed surface
+        if opts.stages.transfer && !photos.is_empty() {
+            let sources: Vec<SourceView> = (0..views.len())
+                .map(|j| SourceView {
+                    camera: &cameras[j],
+                    photo: &photos[j],
+                    hole: &originals[j].2,
+                    depth: &originals[j].0,
+                    alpha: &originals[j].1,
+                })
+                .collect();
+            let found: Vec<Transfer> = (0..views.len())
+                .map(|i| transfer(i, &cameras[i], &views[i].depth, &views[i].fill, &sources, 0.05))
+                .collect();
+            drop(sources);
+            for (i, t) in found.into_iter().enumerate() {
+                let (w, h) = (cameras[i].width as usize, cameras[i].height as usize);
+                let v = &mut views[i];
+                let n = t.found.iter().filter(|&&f| f).count();
+                if n > 0 {
+                    let mut image = v.inpainted.clone();
+                    for p in (0..w * h).filter(|&p| t.found[p]) {
+                        for c in 0..3 {
+                            image[c * w * h + p] = t.rgb[c * w * h + p];
+                        }
+                    }
+                    // what no view saw is invented again, now from the transferred colors too
+                    let rest: Vec<bool> = (0..w * h).map(|p| v.fill[p] && !t.found[p]).collect();
+                    v.inpainted = completer.inpainter.inpaint(&image, &rest, w, h)?;
+                }
+                per_view[i]["transferred_pixels"] = n.into();
+            }
+            lap("transfer", &mut timings);
+        }
         // 4. fusion and pruning (or the nearest-copy baseline)
         if opts.fill == Fill::NearestCopy {
             let removed_means: Vec<[f32; 3]> =

@@ -213,3 +213,72 @@ fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
         assert_eq!(copies.sh[k * 12..(k + 1) * 12], rest.sh[nearest * 12..(nearest + 1) * 12]);
     }
 }
+
+/// Color transfer on a fronto-parallel plane z = 5 seen by two translated cameras, where pixel and
+/// world coordinates are affinely related: at the true depth every target pixel that the source
+/// sees gets exactly the source photo's color of its surface point; off the source's image, in
+/// its hole, or at a depth 10 % off, nothing is transferred.
+#[test]
+fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
+    use cogeo::complete::transfer::{transfer, SourceView};
+    use cogeo::scene::Camera;
+    let (w, h) = (40usize, 30usize);
+    let cam = |name: &str, x: f64| {
+        Camera::look_at(name, w as u32, h as u32, 60.0, [x, 0.0, 0.0], [x, 0.0, 5.0], [0.0, -1.0, 0.0])
+    };
+    let (target_cam, source_cam) = (cam("t", 0.0), cam("s", 0.4));
+    let color = |p: [f64; 3]| [0.5 + 0.1 * p[0], 0.5 + 0.1 * p[1], 0.3];
+    let world = |c: &Camera, px: usize, z: f64| {
+        let (u, v) = ((px % w) as f64 + 0.5, (px / w) as f64 + 0.5);
+        let ctr = c.center();
+        let x = (u - c.cx) / c.fx * z;
+        let y = (v - c.cy) / c.fy * z;
+        // the cameras look along +z with image y down = world y down... as look_at builds them
+        let r = c.rotation;
+        [0, 1, 2].map(|k| ctr[k] + r[0][k] * x + r[1][k] * y + r[2][k] * z)
+    };
+    let mut photo = vec![0f32; 3 * w * h];
+    for p in 0..w * h {
+        let c = color(world(&source_cam, p, 5.0));
+        for k in 0..3 {
+            photo[k * w * h + p] = c[k] as f32;
+        }
+    }
+    let mut hole = vec![false; w * h];
+    for y in 10..20 {
+        for x in 25..30 {
+            hole[y * w + x] = true;
+        }
+    }
+    let depth = vec![5.0f32; w * h];
+    let alpha = vec![1.0f32; w * h];
+    let sources = [
+        SourceView { camera: &target_cam, photo: &photo, hole: &hole, depth: &depth, alpha: &alpha },
+        SourceView { camera: &source_cam, photo: &photo, hole: &hole, depth: &depth, alpha: &alpha },
+    ];
+    let fill = vec![true; w * h];
+    let t = transfer(0, &target_cam, &depth, &fill, &sources, 0.05);
+    let (mut found, mut blocked) = (0, 0);
+    for p in 0..w * h {
+        let pt = world(&target_cam, p, 5.0);
+        let pc = source_cam.to_camera(pt);
+        let (x, y) = (source_cam.fx * pc[0] / pc[2] + source_cam.cx, source_cam.fy * pc[1] / pc[2] + source_cam.cy);
+        let inside = x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64;
+        let in_hole = inside && hole[y as usize * w + x as usize];
+        assert_eq!(t.found[p], inside && !in_hole, "pixel {p}");
+        blocked += in_hole as usize;
+        // away from the source's border, where bilinear lookups clamp, the color is exact
+        if t.found[p] && x > 1.0 && x < w as f64 - 1.0 && y > 1.0 && y < h as f64 - 1.0 {
+            let c = color(pt);
+            for k in 0..3 {
+                assert!((t.rgb[k * w * h + p] as f64 - c[k]).abs() < 1e-5, "pixel {p} channel {k}");
+            }
+            found += 1;
+        }
+    }
+    assert!(found > 600 && blocked > 20, "found {found}, blocked {blocked}");
+    // a completed depth 10 % off does not match what the source rendered there
+    let off = vec![5.5f32; w * h];
+    let t = transfer(0, &target_cam, &off, &fill, &sources, 0.05);
+    assert!(t.found.iter().all(|&f| !f));
+}

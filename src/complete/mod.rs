@@ -11,6 +11,7 @@ pub mod depth;
 pub mod diffusion;
 pub mod image;
 pub mod inpaint;
+pub mod transfer;
 
 use anyhow::Result;
 use depth::{DepthPrior, DepthView, PriorSpace};

@@ -1,0 +1,92 @@
+//! Depth-guided color transfer between the edited views. A pixel to synthesize in view i is
+//! back-projected at its completed depth; where another training view saw that surface point
+//! (outside that view's hole, at the depth that view's original render has there), the point's
+//! color is taken from that view's captured image instead of being invented. Only a good depth
+//! puts the point where the other view really saw it, so this is where depth guidance pays off in
+//! color, not just in geometry.
+
+use crate::scene::Camera;
+
+/// One edited view as the other views see it.
+pub struct SourceView<'a> {
+    pub camera: &'a Camera,
+    /// The captured image (planar RGB in [0, 1]).
+    pub photo: &'a [f32],
+    /// The dilated hole: the removed objects may cover these pixels in the photo.
+    pub hole: &'a [bool],
+    /// Expected depth and alpha of the original render (with the objects).
+    pub depth: &'a [f32],
+    pub alpha: &'a [f32],
+}
+
+/// Colors found for the fill pixels of one target view.
+pub struct Transfer {
+    /// Planar RGB, valid where `found`.
+    pub rgb: Vec<f32>,
+    pub found: Vec<bool>,
+}
+
+fn bilinear(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64) -> f32 {
+    let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
+    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+    let p = |xx: usize, yy: usize| img[c * w * h + yy * w + xx];
+    (1.0 - fy) * ((1.0 - fx) * p(x0, y0) + fx * p(x1, y0)) + fy * ((1.0 - fx) * p(x0, y1) + fx * p(x1, y1))
+}
+
+/// Transfers colors into the `fill` pixels of view `target` (camera, completed depth) from the
+/// `sources` (all edited views; the target itself is skipped by index). A source qualifies when
+/// the point projects inside it, off its hole, where its original render is opaque (alpha > 0.5)
+/// and at the point's depth within `tolerance` (relative). The nearest qualifying camera wins.
+pub fn transfer(
+    target: usize,
+    camera: &Camera,
+    depth: &[f32],
+    fill: &[bool],
+    sources: &[SourceView],
+    tolerance: f64,
+) -> Transfer {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let mut out = Transfer { rgb: vec![0.0; 3 * w * h], found: vec![false; w * h] };
+    let center = camera.center();
+    // sources by distance of their camera centers to the target's
+    let mut order: Vec<usize> = (0..sources.len()).filter(|&j| j != target).collect();
+    let dist = |j: usize| {
+        let c = sources[j].camera.center();
+        (0..3).map(|k| (c[k] - center[k]).powi(2)).sum::<f64>()
+    };
+    order.sort_by(|&a, &b| dist(a).total_cmp(&dist(b)));
+    // camera-to-world: x_w = R^T (x_c - t)
+    let r = camera.rotation;
+    let t = camera.translation;
+    for p in (0..w * h).filter(|&p| fill[p] && depth[p] > 0.0 && depth[p].is_finite()) {
+        let z = depth[p] as f64;
+        let (u, v) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
+        let xc = [(u - camera.cx) / camera.fx * z - t[0], (v - camera.cy) / camera.fy * z - t[1], z - t[2]];
+        let world = [0, 1, 2].map(|k| r[0][k] * xc[0] + r[1][k] * xc[1] + r[2][k] * xc[2]);
+        for &j in &order {
+            let s = &sources[j];
+            let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
+            let pc = s.camera.to_camera(world);
+            if pc[2] <= 1e-6 {
+                continue;
+            }
+            let x = s.camera.fx * pc[0] / pc[2] + s.camera.cx;
+            let y = s.camera.fy * pc[1] / pc[2] + s.camera.cy;
+            if x < 0.0 || y < 0.0 || x >= sw as f64 || y >= sh as f64 {
+                continue;
+            }
+            let q = y as usize * sw + x as usize;
+            if s.hole[q] || s.alpha[q] <= 0.5 || (pc[2] - s.depth[q] as f64).abs() > tolerance * s.depth[q] as f64 {
+                continue;
+            }
+            for c in 0..3 {
+                out.rgb[c * w * h + p] = bilinear(s.photo, sw, sh, c, x, y);
+            }
+            out.found[p] = true;
+            break;
+        }
+    }
+    out
+}
