@@ -465,6 +465,11 @@ struct SynthArgs {
     /// Sparse points sampled from each training view (default: pixels / 12).
     #[arg(long)]
     points_per_view: Option<usize>,
+    /// Also write the exact ground truth of removing only these objects, e.g. `1,2`:
+    /// `without_1-2/` with images/, depth/ and unseen_mask/ (objects kept behind removed ones
+    /// stay visible there, unlike in gt_background/).
+    #[arg(long, value_delimiter = ',')]
+    gt_without: Vec<u8>,
 }
 
 fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
@@ -720,6 +725,8 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
                 &objects.to_string(),
                 "--seed",
                 &a.seed.to_string(),
+                "--gt-without",
+                &labels,
             ]),
         ),
         ("train", train),
@@ -755,10 +762,11 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
     eprintln!("== 6/6 evaluate against the exact object-free ground truth");
     let t = std::time::Instant::now();
     let data = out.join("data");
+    let truth = cogeo::synth::ground_truth(&data, &a.labels);
     let eval = |dir: &str| {
         evaluate(&EvalConfig {
             renders: out.join(dir).join("test_after"),
-            gt: data.join("gt_background"),
+            gt: truth.images.clone(),
             masks: data.join("object_mask"),
             labels: a.labels.clone(),
             protocol: Protocol::Mask,
@@ -786,7 +794,7 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
             load(data.join("images"))?,
             load(out.join("removal_only/test_after"))?,
             load(out.join("removal/test_after"))?,
-            load(data.join("gt_background"))?,
+            load(truth.images.clone())?,
         ];
         let refs: Vec<&[f32]> = images.iter().map(|v| v.as_slice()).collect();
         let (w, h, strip) = hstack(&refs, width as usize, height as usize);
@@ -1039,6 +1047,7 @@ fn cmd_synth(a: SynthArgs) -> Result<()> {
         rig: a.rig,
         seed: a.seed,
         points_per_view: a.points_per_view.unwrap_or((a.width * a.height / 12) as usize),
+        gt_without: a.gt_without.clone(),
     };
     let bar = progress(2 * a.views, "synth");
     let objects = cogeo::synth::generate(&cfg, &a.out, &|done, _| bar.set_position(done as u64))?;
@@ -1324,6 +1333,7 @@ fn cmd_remove(a: RemoveArgs) -> Result<()> {
     let synth = cogeo::eval::synth_metrics(&a.data, &test_cams, &test_after, &labels)?;
     let depth_error = cogeo::eval::synth_depth_error(
         &a.data,
+        &labels,
         &cameras,
         &v.iter().map(|x| x.depth.clone()).collect::<Vec<_>>(),
         &v.iter().map(|x| x.fill.clone()).collect::<Vec<_>>(),

@@ -69,6 +69,55 @@ pub struct SynthConfig {
     pub seed: u64,
     /// Sparse points sampled from each training view for the COLMAP model.
     pub points_per_view: usize,
+    /// Also write the ground truth of removing just these objects (`without_<labels>/`); empty:
+    /// only the all-objects-removed ground truth.
+    pub gt_without: Vec<u8>,
+}
+
+/// Where a synth dataset keeps the ground truth of removing `labels`: the scene ray-cast without
+/// exactly those objects (`images`), its depth, and the never-seen mask of its surface.
+pub struct GroundTruth {
+    pub images: std::path::PathBuf,
+    pub depth: std::path::PathBuf,
+    pub unseen: std::path::PathBuf,
+    /// False when only the all-objects-removed ground truth exists although some objects stay:
+    /// objects kept behind removed ones then differ from the truth.
+    pub exact: bool,
+}
+
+/// Name of the subset ground-truth folder, e.g. `without_1-2`.
+pub fn subset_dir_name(labels: &[u8]) -> String {
+    let mut l = labels.to_vec();
+    l.sort();
+    l.dedup();
+    format!("without_{}", l.iter().map(|v| v.to_string()).collect::<Vec<_>>().join("-"))
+}
+
+/// The ground truth of removing `labels` from the synth dataset `data`.
+pub fn ground_truth(data: &Path, labels: &[u8]) -> GroundTruth {
+    let sub = data.join(subset_dir_name(labels));
+    if sub.is_dir() {
+        return GroundTruth {
+            images: sub.join("images"),
+            depth: sub.join("depth"),
+            unseen: sub.join("unseen_mask"),
+            exact: true,
+        };
+    }
+    // every object removed: the background ground truth is exact
+    let objects = std::fs::read_to_string(data.join("synth.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|m| {
+            m["objects"].as_array().map(|a| a.iter().filter_map(|o| o["label"].as_u64()).collect::<Vec<_>>())
+        });
+    let exact = objects.is_some_and(|all| all.iter().all(|l| labels.contains(&(*l as u8))));
+    GroundTruth {
+        images: data.join("gt_background"),
+        depth: data.join("depth_background"),
+        unseen: data.join("unseen_mask"),
+        exact,
+    }
 }
 
 const ROOM_RADIUS: f64 = 6.0;
@@ -402,7 +451,18 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     if out.exists() && std::fs::read_dir(out)?.next().is_some() {
         bail!("{}: output folder is not empty", out.display());
     }
-    for sub in ["images", "object_mask", "gt_background", "depth", "depth_background", "unseen_mask", "sparse/0"] {
+    if cfg.gt_without.iter().any(|&l| l == 0 || l as usize > cfg.objects) {
+        bail!("--gt-without: labels must be 1..={}", cfg.objects);
+    }
+    let subset_dir = (!cfg.gt_without.is_empty()).then(|| subset_dir_name(&cfg.gt_without));
+    let mut folders: Vec<String> =
+        ["images", "object_mask", "gt_background", "depth", "depth_background", "unseen_mask", "sparse/0"]
+            .map(String::from)
+            .to_vec();
+    if let Some(d) = &subset_dir {
+        folders.extend(["images", "depth", "unseen_mask"].map(|f| format!("{d}/{f}")));
+    }
+    for sub in &folders {
         std::fs::create_dir_all(out.join(sub))
             .with_context(|| format!("{}: cannot create", out.join(sub).display()))?;
     }
@@ -412,12 +472,16 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         bail!("could not place {} non-overlapping objects", cfg.objects);
     }
     let cameras = make_cameras(cfg);
-    let hw = (cfg.width * cfg.height) as usize;
     let mut with_objects = Vec::new();
     let mut background = Vec::new();
+    let mut without_subset = Vec::new();
+    let kept: Vec<Object> = objects.iter().filter(|o| !cfg.gt_without.contains(&o.label)).cloned().collect();
     for (i, cam) in cameras.iter().enumerate() {
         with_objects.push(render_view(cam, &objects, cfg.seed));
         background.push(render_view(cam, &[], cfg.seed));
+        if subset_dir.is_some() {
+            without_subset.push(render_view(cam, &kept, cfg.seed));
+        }
         progress(i + 1, 2 * cameras.len());
     }
     let train: Vec<usize> = (0..cameras.len()).filter(|&i| !is_test_view(i)).collect();
@@ -432,31 +496,15 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         write_exr(&out.join(format!("depth/{name}.exr")), w, h, &[("Y", &v.depth)])?;
         write_exr(&out.join(format!("depth_background/{name}.exr")), w, h, &[("Y", &b.depth)])?;
         // background never seen: its surface point is visible (not behind an object) in no training view
-        let unseen: Vec<u8> = (0..hw)
-            .map(|p| {
-                let point = b.points[p];
-                let seen = train.iter().any(|&t| {
-                    let tc = &cameras[t];
-                    let pc = tc.to_camera(point);
-                    if pc[2] <= 1e-6 {
-                        return false;
-                    }
-                    let u = tc.fx * pc[0] / pc[2] + tc.cx;
-                    let vv = tc.fy * pc[1] / pc[2] + tc.cy;
-                    if u < 0.0 || vv < 0.0 || u >= tc.width as f64 || vv >= tc.height as f64 {
-                        return false;
-                    }
-                    let q = vv as usize * tc.width as usize + u as usize;
-                    (with_objects[t].depth[q] as f64 - pc[2]).abs() <= 0.02 * pc[2]
-                });
-                if seen {
-                    0
-                } else {
-                    255
-                }
-            })
-            .collect();
+        let unseen = never_seen(&b.points, &cameras, &train, &with_objects);
         write_png(&out.join(format!("unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
+        if let Some(d) = &subset_dir {
+            let s = &without_subset[i];
+            write_png_rgb(&out.join(format!("{d}/images/{name}.png")), w, h, &s.rgb)?;
+            write_exr(&out.join(format!("{d}/depth/{name}.exr")), w, h, &[("Y", &s.depth)])?;
+            let unseen = never_seen(&s.points, &cameras, &train, &with_objects);
+            write_png(&out.join(format!("{d}/unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
+        }
         progress(cameras.len() + i + 1, 2 * cameras.len());
     }
     write_colmap(cfg, &cameras, &with_objects, &train, out, &mut rng)?;
@@ -464,6 +512,34 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     let text = serde_json::to_string_pretty(&meta)?;
     write_atomic(&out.join("synth.json"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
     Ok(objects)
+}
+
+/// 255 where the surface point of a pixel is visible in no training view of the full scene.
+fn never_seen(points: &[V3], cameras: &[Camera], train: &[usize], with_objects: &[ViewRender]) -> Vec<u8> {
+    points
+        .iter()
+        .map(|&point| {
+            let seen = train.iter().any(|&t| {
+                let tc = &cameras[t];
+                let pc = tc.to_camera(point);
+                if pc[2] <= 1e-6 {
+                    return false;
+                }
+                let u = tc.fx * pc[0] / pc[2] + tc.cx;
+                let vv = tc.fy * pc[1] / pc[2] + tc.cy;
+                if u < 0.0 || vv < 0.0 || u >= tc.width as f64 || vv >= tc.height as f64 {
+                    return false;
+                }
+                let q = vv as usize * tc.width as usize + u as usize;
+                (with_objects[t].depth[q] as f64 - pc[2]).abs() <= 0.02 * pc[2]
+            });
+            if seen {
+                0
+            } else {
+                255
+            }
+        })
+        .collect()
 }
 
 fn write_colmap(

@@ -335,3 +335,58 @@ fn eval_cli_on_a_synth_dataset() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("no mask for render nomask"));
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// `synth --gt-without 1` ray-casts the views without object 1 only: object 2 stays exactly where
+/// it was visible, object 1's pixels change, and `ground_truth` resolves which truth is exact.
+#[test]
+fn synth_writes_the_ground_truth_of_removing_a_subset() {
+    let exe = env!("CARGO_BIN_EXE_cogeo");
+    let root = std::env::temp_dir().join(format!("cogeo_gt_subset_{}", std::process::id()));
+    let data = root.join("data");
+    let d = data.to_string_lossy().into_owned();
+    run_cogeo(
+        exe,
+        &[
+            "synth",
+            "--out",
+            &d,
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--views",
+            "8",
+            "--objects",
+            "2",
+            "--seed",
+            "3",
+            "--gt-without",
+            "1",
+        ],
+    );
+    let truth = cogeo::synth::ground_truth(&data, &[1]);
+    assert!(truth.exact && truth.images.ends_with("without_1/images"));
+    assert!(cogeo::synth::ground_truth(&data, &[2, 1]).exact, "removing every object: gt_background is exact");
+    assert!(!cogeo::synth::ground_truth(&data, &[2]).exact, "no truth was written for removing object 2 alone");
+    let (mut kept, mut changed) = (0, 0);
+    for i in 0..8 {
+        let name = format!("view_{i:03}");
+        let full = image::open(data.join(format!("images/{name}.png"))).unwrap().to_rgb8();
+        let without = image::open(truth.images.join(format!("{name}.png"))).unwrap().to_rgb8();
+        let mask = image::open(data.join(format!("object_mask/{name}.png"))).unwrap().to_luma8();
+        for (p, m) in mask.pixels().enumerate() {
+            let (x, y) = (p as u32 % 40, p as u32 / 40);
+            match m[0] {
+                2 => {
+                    assert_eq!(full.get_pixel(x, y), without.get_pixel(x, y), "{name}: object 2 changed at ({x}, {y})");
+                    kept += 1;
+                }
+                1 => changed += (full.get_pixel(x, y) != without.get_pixel(x, y)) as usize,
+                _ => {}
+            }
+        }
+        assert!(truth.unseen.join(format!("{name}.png")).exists() && truth.depth.join(format!("{name}.exr")).exists());
+    }
+    assert!(kept > 0 && changed > 0, "kept {kept}, changed {changed}");
+    std::fs::remove_dir_all(&root).ok();
+}

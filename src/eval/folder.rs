@@ -104,6 +104,11 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
     let mut lpips = cfg.lpips.as_deref().map(Lpips::load).transpose()?;
     let mut fid = cfg.fid.as_deref().map(FidFeatures::load).transpose()?;
     let stems = image_stems(&cfg.renders)?;
+    // the synth ground truth of removing exactly the masked objects (all of them without --labels)
+    let truth = cfg.data.as_ref().map(|d| {
+        let labels = if cfg.labels.is_empty() { (1..=255).collect::<Vec<u8>>() } else { cfg.labels.clone() };
+        crate::synth::ground_truth(d, &labels)
+    });
     let mut views = Vec::new();
     let (mut m_mask, mut m_bbox, mut m_full, mut m_unseen, mut m_seen) = (vec![], vec![], vec![], vec![], vec![]);
     let (mut leftovers, mut lp_bbox, mut lp_full) = (vec![], vec![], vec![]);
@@ -128,8 +133,8 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         m_mask.push(sm);
         m_bbox.push(sb);
         m_full.push(sf);
-        if let Some(data) = &cfg.data {
-            let upath = data.join(format!("unseen_mask/{stem}.png"));
+        if let (Some(data), Some(truth)) = (&cfg.data, &truth) {
+            let upath = truth.unseen.join(format!("{stem}.png"));
             let unseen = load_mask(&upath, &[], w, h)?;
             let inside: Vec<bool> = mask.iter().zip(&unseen).map(|(&m, &u)| m && u).collect();
             let elsewhere: Vec<bool> = mask.iter().zip(&unseen).map(|(&m, &u)| m && !u).collect();
@@ -147,7 +152,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
             if let Some(ddir) = &cfg.depth {
                 let dpath = ddir.join(format!("{stem}.exr"));
                 let (dw, dh, depth) = crate::io::read_exr_channel(&dpath, None)?;
-                let tpath = data.join(format!("depth_background/{stem}.exr"));
+                let tpath = truth.depth.join(format!("{stem}.exr"));
                 let (tw, th, truth) = crate::io::read_exr_channel(&tpath, None)?;
                 if (dw, dh) != (w, h) || (tw, th) != (w, h) {
                     bail!("{} / {}: depth size differs from the render's {w}x{h}", dpath.display(), tpath.display());
@@ -189,6 +194,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         "masks": cfg.masks,
         "labels": cfg.labels,
         "protocol": cfg.protocol,
+        "synth_ground_truth": truth.as_ref().map(|t| json!({ "images": t.images, "exact": t.exact })),
         "headline": headline,
         "mask": mean_scores(&m_mask),
         "bbox": mean_scores(&m_bbox),

@@ -61,8 +61,8 @@ pub struct SynthMetrics {
     pub full_psnr: f64,
 }
 
-/// Evaluates `renders` (planar RGB, one per camera) against `data`'s ground truth; None when the
-/// dataset has no `gt_background/` (not a synth dataset).
+/// Evaluates `renders` (planar RGB, one per camera) against `data`'s ground truth of removing
+/// `removed_labels` (`synth::ground_truth`); None when `data` is not a synth dataset.
 pub fn synth_metrics(
     data: &std::path::Path,
     cameras: &[crate::scene::Camera],
@@ -70,7 +70,7 @@ pub fn synth_metrics(
     removed_labels: &[u8],
 ) -> anyhow::Result<Option<SynthMetrics>> {
     use crate::train::dataset::{find_image, load_rgb};
-    let (gt_dir, mask_dir) = (data.join("gt_background"), data.join("object_mask"));
+    let (gt_dir, mask_dir) = (crate::synth::ground_truth(data, removed_labels).images, data.join("object_mask"));
     if !gt_dir.is_dir() || !mask_dir.is_dir() {
         return Ok(None);
     }
@@ -103,15 +103,16 @@ pub fn synth_metrics(
 }
 
 /// Depth error of completed depth maps in their fill regions against a `cogeo synth` dataset's
-/// object-free depth (`depth_background/`): (AbsRel, RMSE) over all fill pixels of all views; None
-/// when the dataset has no such depth or no pixel was filled.
+/// true depth after removing `removed_labels`: (AbsRel, RMSE) over all fill pixels of all views;
+/// None when the dataset has no such depth or no pixel was filled.
 pub fn synth_depth_error(
     data: &std::path::Path,
+    removed_labels: &[u8],
     cameras: &[crate::scene::Camera],
     depths: &[Vec<f32>],
     fills: &[Vec<bool>],
 ) -> anyhow::Result<Option<(f64, f64)>> {
-    let dir = data.join("depth_background");
+    let dir = crate::synth::ground_truth(data, removed_labels).depth;
     if !dir.is_dir() {
         return Ok(None);
     }
