@@ -7,6 +7,8 @@
 //!    the part of M that the remaining Gaussians do not already cover (alpha after removal below
 //!    `keep_alpha`): background seen from other views keeps its render.
 //! 3. Completion per view (complete/): inpainting, depth anchoring, depth refinement.
+//!    Then colors of fill pixels that other views saw come from those views' captured images
+//!    (complete/transfer.rs); only the rest stays invented.
 //! 4. Fusion and pruning (fuse.rs).
 //! 5. Refinement (refine.rs).
 //!
