@@ -325,11 +325,12 @@ struct RemovalFlags {
     /// DDIM steps of --depth-refiner.
     #[arg(long, default_value_t = 20)]
     diffusion_steps: usize,
-    /// Ablation: no depth prior; new Gaussians are placed at the depth rendered after removal.
+    /// Ablation: no depth prior; new Gaussians are placed at the depth rendered after removal, and
+    /// the built-in inpainter fills without the background planes.
     #[arg(long)]
     no_depth_guidance: bool,
-    /// Ablation: no depth-guided color transfer (fill pixels that other views saw are inpainted
-    /// like the rest instead of taking those views' captured colors).
+    /// Ablation: no depth-guided color transfer (hole pixels that other views saw keep their render
+    /// or are inpainted like the rest instead of taking those views' captured colors).
     #[arg(long)]
     no_transfer: bool,
     /// How new Gaussians are made: depth (back-projected completed depth, fused and pruned) or

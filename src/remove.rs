@@ -6,9 +6,10 @@
 //!    splatted as a one-channel feature), dilated by `dilate` pixels. The pixels to synthesize are
 //!    the part of M that the remaining Gaussians do not already cover (alpha after removal below
 //!    `keep_alpha`): background seen from other views keeps its render.
-//! 3. Completion per view (complete/): inpainting, depth anchoring, depth refinement.
-//!    Then colors of fill pixels that other views saw come from those views' captured images
-//!    (complete/transfer.rs); only the rest stays invented.
+//! 3. Completion per view (complete/): inpainting, depth anchoring, depth refinement, the
+//!    depth's planes guiding the built-in inpainter. Then colors of hole pixels that other views
+//!    saw come from those views' captured images (complete/transfer.rs), which also corrects
+//!    covered but poorly rendered ones; only the rest of the fill stays invented.
 //! 4. Fusion and pruning (fuse.rs).
 //! 5. Refinement (refine.rs).
 //!
@@ -236,6 +237,7 @@ pub fn remove(
     let mut refine_report: Option<RefineReport> = None;
     if opts.stages.complete {
         // 3. completion
+        let mut surfaces = Vec::new();
         for (i, (v, rest)) in views.iter_mut().zip(&after_removal).enumerate() {
             let (w, h) = (cameras[i].width as usize, cameras[i].height as usize);
             let inputs = ViewInputs {
@@ -260,10 +262,12 @@ pub fn remove(
             }));
             v.inpainted = c.rgb;
             v.depth = c.depth;
+            surfaces.push(c.surfaces);
             progress("complete", i + 1, cameras.len());
         }
         lap("complete", &mut timings);
-        // 3b. depth-guided color transfer from the views that saw the completed surface
+        // 3b. depth-guided color transfer from the views that saw the completed surface, over the
+        // whole hole: covered pixels render background that few views constrained
         if opts.stages.transfer && !photos.is_empty() {
             let sources: Vec<SourceView> = (0..views.len())
                 .map(|j| SourceView {
@@ -275,7 +279,7 @@ pub fn remove(
                 })
                 .collect();
             let found: Vec<Transfer> = (0..views.len())
-                .map(|i| transfer(i, &cameras[i], &views[i].depth, &views[i].fill, &sources, 0.05))
+                .map(|i| transfer(i, &cameras[i], &views[i].depth, &views[i].hole, &sources, 0.05))
                 .collect();
             drop(sources);
             for (i, t) in found.into_iter().enumerate() {
@@ -291,7 +295,7 @@ pub fn remove(
                     }
                     // what no view saw is invented again, now from the transferred colors too
                     let rest: Vec<bool> = (0..w * h).map(|p| v.fill[p] && !t.found[p]).collect();
-                    v.inpainted = completer.inpainter.inpaint(&image, &rest, w, h)?;
+                    v.inpainted = completer.inpaint_again(&image, &rest, &surfaces[i], w, h)?;
                 }
                 per_view[i]["transferred_pixels"] = n.into();
             }

@@ -56,6 +56,41 @@ fn least_squares_recovers_a_known_scale_and_shift() {
 }
 
 #[test]
+fn builtin_prior_keeps_the_crease_where_a_floor_meets_a_wall() {
+    // seen from inside a room, the nearer of two planes: inverse depth is the larger of two affine
+    // functions of the pixel, with a crease across the hole
+    let (w, h) = (64, 48);
+    let floor = |x: f32, y: f32| 0.05 + 0.0005 * x + 0.006 * y;
+    let wall = |x: f32, _y: f32| 0.25 - 0.0004 * x;
+    let truth: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            floor(x, y).max(wall(x, y))
+        })
+        .collect();
+    let hole = hole(w, h);
+    let render_depth: Vec<f32> = truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
+    let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+    let image = vec![0.5; 3 * w * h];
+    let view =
+        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &known, covered: &known };
+    let (prior, _) = DepthPrior::BuiltIn.predict(&view).unwrap();
+    let err = (0..w * h).filter(|&i| hole[i]).map(|i| (prior[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
+    assert!(err < 1e-4, "planar prior relative error {err}");
+    // the harmonic interpolant alone rounds the crease off
+    let harmonic = cogeo::complete::image::harmonic_fill(
+        &render_depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect::<Vec<_>>(),
+        &known,
+        w,
+        h,
+        1,
+    );
+    let rounded =
+        (0..w * h).filter(|&i| hole[i]).map(|i| (harmonic[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
+    assert!(rounded > 0.01, "harmonic error {rounded}");
+}
+
+#[test]
 fn onnx_denoiser_loop_synthesizes_only_the_hole() {
     let dir = tmp("denoiser");
     let path = onnx::write(&dir, "denoiser.onnx", &onnx::tiny_denoiser());

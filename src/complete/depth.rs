@@ -7,10 +7,11 @@
 //! `D_anchor = M_soft D_align + (1 - M_soft) D_render` with the softly dilated hole mask M_soft.
 //!
 //! Priors (`DepthPrior`):
-//! - `BuiltIn`: the rendered depth where the remaining Gaussians cover the pixel, and elsewhere the
-//!   harmonic completion of the rendered inverse depth from the uncovered region's boundary. Inverse
-//!   depth of a plane is affine in pixel coordinates, and harmonic interpolation reproduces affine
-//!   data exactly, so a hole over a planar background (floor, wall) gets that plane's depth.
+//! - `BuiltIn`: the rendered depth where the remaining Gaussians cover the pixel. Elsewhere, the
+//!   planes found around the uncovered region (surfaces.rs: RANSAC on inverse depth, which is affine
+//!   in pixel coordinates for a plane) continued into it, the one in front where they meet; where no
+//!   plane is plausible, the harmonic completion of the rendered inverse depth from the region's
+//!   boundary (which also reproduces a single plane exactly).
 //! - `DepthAnythingV2`: input `image` [1, 3, H, W] ImageNet-normalized RGB with H and W multiples of
 //!   14 (the view resized to the nearest such size, longer side at most 518), output [1, H, W] (or
 //!   [1, 1, H, W]) affine-invariant disparity, fitted in disparity.
@@ -20,6 +21,7 @@
 //! Either model may name its single input and output as it likes.
 
 use super::image::{feather, harmonic_fill, resize_bilinear};
+use super::surfaces::surfaces_around;
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
 use std::path::Path;
@@ -71,6 +73,9 @@ pub enum DepthPrior {
     BuiltIn,
     Onnx(Box<Model>, DepthContract),
 }
+
+/// RANSAC seed of the plane fits (fixed: completion is deterministic).
+pub const PLANE_SEED: u64 = 0x5eed_91a2;
 
 const IMAGENET_MEAN: [f32; 3] = [0.485, 0.456, 0.406];
 const IMAGENET_STD: [f32; 3] = [0.229, 0.224, 0.225];
@@ -127,7 +132,17 @@ impl DepthPrior {
                 let known: Vec<bool> = (0..w * h).map(|i| v.covered[i] && v.render_depth[i] > 0.0).collect();
                 let disparity: Vec<f32> =
                     (0..w * h).map(|i| if known[i] { 1.0 / v.render_depth[i] } else { 0.0 }).collect();
-                Ok((harmonic_fill(&disparity, &known, w, h, 1), PriorSpace::Disparity))
+                let mut filled = harmonic_fill(&disparity, &known, w, h, 1);
+                // the planes around the uncovered part continue into it, meeting at creases; the
+                // harmonic interpolant stays where no plane is plausible
+                let unknown: Vec<bool> = known.iter().map(|&k| !k).collect();
+                let surfaces = surfaces_around(&disparity, &known, &unknown, w, h, PLANE_SEED);
+                for i in (0..w * h).filter(|&i| unknown[i]) {
+                    if let Some((_, d)) = surfaces.visible(i, w) {
+                        filled[i] = d as f32;
+                    }
+                }
+                Ok((filled, PriorSpace::Disparity))
             }
             DepthPrior::Onnx(model, contract) => {
                 let (iw, ih) = match contract {

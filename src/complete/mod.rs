@@ -1,16 +1,22 @@
 //! Stage 3 of removal, depth-guided completion of one view: RGB inpainting of the hole, then depth
-//! in two stages (scale anchoring of a monocular prior, then detail refinement in the hole).
+//! in two stages (scale anchoring of a monocular prior, then detail refinement in the hole). The
+//! completed depth guides the color in turn: the built-in inpainter fills each background plane
+//! from that plane's pixels only.
 //!
 //! - `inpaint`: built-in harmonic fill, or a LaMa-contract ONNX model.
 //! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
 //!   edge-aware model-free refinement.
 //! - `diffusion`: the masked DDIM loop of a depth-inpainting denoiser (ONNX).
 //! - `image`: resizing, masks, harmonic fill.
+//! - `surfaces`: the background planes around a hole, for the depth prior and for keeping each
+//!   surface's colors on it.
+//! - `transfer`: colors of the completed surface from the other views that saw it.
 
 pub mod depth;
 pub mod diffusion;
 pub mod image;
 pub mod inpaint;
+pub mod surfaces;
 pub mod transfer;
 
 use anyhow::Result;
@@ -53,6 +59,9 @@ pub struct ViewInputs<'a> {
 pub struct Completed {
     pub rgb: Vec<f32>,
     pub depth: Vec<f32>,
+    /// Per pixel, 1 + the index of the background plane its completed depth lies on, or 0
+    /// (surfaces.rs); all 0 without depth guidance.
+    pub surfaces: Vec<u8>,
     pub scale: f64,
     pub shift: f64,
     pub space: Option<PriorSpace>,
@@ -72,7 +81,16 @@ impl Completer {
                 v.expected_depth.iter().zip(&valid).filter(|(_, &ok)| ok).map(|(&d, _)| d).collect();
             let mean = if covered.is_empty() { 1.0 } else { covered.iter().sum::<f32>() / covered.len() as f32 };
             let depth = (0..w * h).map(|i| if v.alpha[i] > 0.05 { v.expected_depth[i] } else { mean }).collect();
-            return Ok(Completed { rgb, depth, scale: 1.0, shift: 0.0, space: None, fit_pixels: 0, residual: 0.0 });
+            return Ok(Completed {
+                rgb,
+                depth,
+                surfaces: vec![0; w * h],
+                scale: 1.0,
+                shift: 0.0,
+                space: None,
+                fit_pixels: 0,
+                residual: 0.0,
+            });
         }
         let covered: Vec<bool> = (0..w * h).map(|i| v.alpha[i] > 0.5).collect();
         let view = DepthView {
@@ -85,6 +103,17 @@ impl Completer {
         };
         let (prior, space) = self.prior.predict(&view)?;
         let anchored = depth::anchor(&view, &prior, space, v.fill, self.soft_radius)?;
+        // depth guides color: the planes around the fill, and which of them each pixel lies on
+        let disparity: Vec<f32> = anchored.depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect();
+        let around: Vec<bool> = (0..w * h).map(|i| !v.fill[i] && covered[i]).collect();
+        let planes = surfaces::surfaces_around(&disparity, &around, v.fill, w, h, depth::PLANE_SEED);
+        let labels = planes.labels(&anchored.depth, w);
+        // the built-in inpainter fills again, surface by surface; a learned inpainter's output is
+        // kept, since it sees more than a surface label
+        let rgb = match self.inpainter {
+            Inpainter::BuiltIn => surfaces::fill_by_surface(v.rgb, v.fill, &labels, w, h, 3),
+            Inpainter::Onnx(_) => rgb,
+        };
         let depth = match &mut self.refiner {
             Some(den) => diffusion::masked_ddim(
                 &anchored.depth,
@@ -106,11 +135,28 @@ impl Completer {
         Ok(Completed {
             rgb,
             depth,
+            surfaces: labels,
             scale: anchored.scale,
             shift: anchored.shift,
             space: Some(space),
             fit_pixels: anchored.fit_pixels,
             residual: anchored.residual,
         })
+    }
+
+    /// Inpaints `fill` of `image` (e.g. after color transfer made more pixels known), keeping
+    /// each surface's colors on that surface where the built-in inpainter is used.
+    pub fn inpaint_again(
+        &mut self,
+        image: &[f32],
+        fill: &[bool],
+        labels: &[u8],
+        w: usize,
+        h: usize,
+    ) -> Result<Vec<f32>> {
+        match self.inpainter {
+            Inpainter::BuiltIn => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
+            Inpainter::Onnx(_) => self.inpainter.inpaint(image, fill, w, h),
+        }
     }
 }

@@ -1,0 +1,415 @@
+//! The surfaces around a hole. The background next to a removed object is mostly a few planes
+//! (floor, walls, a table top). In a pinhole view the inverse depth of a plane is affine in pixel
+//! coordinates, so planes are found by RANSAC on (x, y, 1/d) of the known pixels in a band around
+//! the hole, with no intrinsics needed. They serve twice:
+//! - the built-in depth prior continues each plane into the hole, and where planes meet it keeps
+//!   the one the band shows in front (a floor meets a wall at a crease that a smooth interpolant
+//!   would round off);
+//! - depth-guided color: each pixel to synthesize is filled from the known pixels of its own
+//!   surface only (`fill_by_surface`), so floor texture does not bleed into the wall.
+
+use super::image::{bounding_box, distance_to, harmonic_fill, Rect};
+
+/// A plane as its inverse depth over the image: disparity = a x + b y + c at pixel center (x, y).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+}
+
+impl Plane {
+    pub fn disparity(&self, x: f64, y: f64) -> f64 {
+        self.a * x + self.b * y + self.c
+    }
+
+    /// Relative disparity residual of pixel `i` (of a w-wide image) with disparity `d`.
+    fn residual(&self, i: usize, w: usize, d: f64) -> f64 {
+        let (x, y) = center(i, w);
+        (self.disparity(x, y) - d).abs() / d
+    }
+}
+
+fn center(i: usize, w: usize) -> (f64, f64) {
+    ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5)
+}
+
+/// Relative disparity tolerance of plane membership (trained scenes render depth with a few
+/// percent of noise).
+pub const PLANE_TOLERANCE: f64 = 0.03;
+const RANSAC_TRIALS: usize = 256;
+const MAX_PLANES: usize = 3;
+
+/// Solves the 3x3 system m z = r (Gaussian elimination with partial pivoting); None if singular.
+fn solve3(mut m: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
+    let scale = m.iter().flatten().fold(0f64, |s, v| s.max(v.abs()));
+    if scale == 0.0 {
+        return None;
+    }
+    for col in 0..3 {
+        let p = (col..3).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
+        if m[p][col].abs() < 1e-12 * scale {
+            return None;
+        }
+        m.swap(col, p);
+        r.swap(col, p);
+        for row in col + 1..3 {
+            let f = m[row][col] / m[col][col];
+            for k in col..3 {
+                m[row][k] -= f * m[col][k];
+            }
+            r[row] -= f * r[col];
+        }
+    }
+    let mut z = [0f64; 3];
+    for row in (0..3).rev() {
+        let s: f64 = (row + 1..3).map(|k| m[row][k] * z[k]).sum();
+        z[row] = (r[row] - s) / m[row][row];
+    }
+    Some(z)
+}
+
+/// Least-squares plane through the pixels `idx` (centered coordinates for conditioning).
+fn least_squares(idx: &[usize], disp: &[f32], w: usize) -> Option<Plane> {
+    let n = idx.len() as f64;
+    if idx.len() < 3 {
+        return None;
+    }
+    let (mx, my) = idx.iter().fold((0.0, 0.0), |(sx, sy), &i| {
+        let (x, y) = center(i, w);
+        (sx + x / n, sy + y / n)
+    });
+    let mut m = [[0f64; 3]; 3];
+    let mut r = [0f64; 3];
+    for &i in idx {
+        let (x, y) = center(i, w);
+        let row = [x - mx, y - my, 1.0];
+        for j in 0..3 {
+            for k in 0..3 {
+                m[j][k] += row[j] * row[k];
+            }
+            r[j] += row[j] * disp[i] as f64;
+        }
+    }
+    let [a, b, c] = solve3(m, r)?;
+    Some(Plane { a, b, c: c - a * mx - b * my })
+}
+
+/// Deterministic splitmix64.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// Sequential RANSAC: up to `max_planes` planes, each supported by at least `min_inliers` of the
+/// pixels where `sample` holds (disparity `disp`, relative tolerance `tol`); each plane is refitted
+/// by least squares on the core of its inliers, which are then taken out for the next one.
+/// Deterministic.
+pub fn fit_planes(
+    disp: &[f32],
+    sample: &[bool],
+    w: usize,
+    tol: f64,
+    max_planes: usize,
+    min_inliers: usize,
+    seed: u64,
+) -> Vec<Plane> {
+    let mut pts: Vec<usize> = (0..disp.len()).filter(|&i| sample[i] && disp[i] > 0.0 && disp[i].is_finite()).collect();
+    let mut rng = Rng(seed);
+    let mut planes = Vec::new();
+    let inliers = |p: &Plane, pts: &[usize]| -> Vec<usize> {
+        pts.iter().copied().filter(|&i| p.residual(i, w, disp[i] as f64) <= tol).collect()
+    };
+    while planes.len() < max_planes && pts.len() >= min_inliers.max(3) {
+        let mut best: Option<(usize, Plane)> = None;
+        for _ in 0..RANSAC_TRIALS {
+            let pick = [rng.below(pts.len()), rng.below(pts.len()), rng.below(pts.len())];
+            if pick[0] == pick[1] || pick[1] == pick[2] || pick[0] == pick[2] {
+                continue;
+            }
+            let mut m = [[0f64; 3]; 3];
+            let mut r = [0f64; 3];
+            for (row, &k) in pick.iter().enumerate() {
+                let (x, y) = center(pts[k], w);
+                m[row] = [x, y, 1.0];
+                r[row] = disp[pts[k]] as f64;
+            }
+            let Some([a, b, c]) = solve3(m, r) else { continue };
+            let p = Plane { a, b, c };
+            let n = pts.iter().filter(|&&i| p.residual(i, w, disp[i] as f64) <= tol).count();
+            if best.as_ref().is_none_or(|(bn, _)| n > *bn) {
+                best = Some((n, p));
+            }
+        }
+        let Some((n, p)) = best else { break };
+        if n < min_inliers {
+            break;
+        }
+        // refit by least squares on the core of the inliers (residual within 3x their median):
+        // points of a neighbouring plane near the crease lie within the tolerance too and would
+        // tilt the fit
+        let mut p = p;
+        for _ in 0..4 {
+            let inl = inliers(&p, &pts);
+            let mut rs: Vec<f64> = inl.iter().map(|&i| p.residual(i, w, disp[i] as f64)).collect();
+            rs.sort_by(|a, b| a.total_cmp(b));
+            let cut = (3.0 * rs[rs.len() / 2]).max(1e-7);
+            let core: Vec<usize> = inl.into_iter().filter(|&i| p.residual(i, w, disp[i] as f64) <= cut).collect();
+            p = least_squares(&core, disp, w).unwrap_or(p);
+        }
+        let own = inliers(&p, &pts);
+        if own.len() < min_inliers {
+            break;
+        }
+        planes.push(p);
+        pts.retain(|&i| p.residual(i, w, disp[i] as f64) > tol);
+    }
+    planes
+}
+
+/// The planes around one hole and which of them is seen where they meet.
+#[derive(Clone, Debug)]
+pub struct Surfaces {
+    pub planes: Vec<Plane>,
+    /// Where planes overlap, the nearest (largest disparity) is seen, as inside a room; otherwise
+    /// the farthest, as around a convex corner. Chosen by what the band shows.
+    pub nearest_first: bool,
+    /// Plausible disparities (from the band): a plane continued beyond them is not used.
+    lo: f64,
+    hi: f64,
+}
+
+impl Surfaces {
+    /// The visible plane at pixel `i` and its disparity.
+    pub fn visible(&self, i: usize, w: usize) -> Option<(usize, f64)> {
+        let (x, y) = center(i, w);
+        let mut best: Option<(usize, f64)> = None;
+        for (s, p) in self.planes.iter().enumerate() {
+            let d = p.disparity(x, y);
+            if !(d >= self.lo && d <= self.hi) {
+                continue;
+            }
+            let better = match best {
+                None => true,
+                Some((_, bd)) => (d > bd) == self.nearest_first,
+            };
+            if better {
+                best = Some((s, d));
+            }
+        }
+        best
+    }
+
+    /// The plane pixel `i` with disparity `d` lies on (the best fitting within tolerance).
+    pub fn member(&self, i: usize, w: usize, d: f64) -> Option<usize> {
+        if d <= 0.0 || !d.is_finite() {
+            return None;
+        }
+        self.planes
+            .iter()
+            .enumerate()
+            .map(|(s, p)| (s, p.residual(i, w, d)))
+            .filter(|&(_, r)| r <= PLANE_TOLERANCE)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(s, _)| s)
+    }
+
+    /// Per pixel, 1 + the plane the depth `depth` lies on, or 0.
+    pub fn labels(&self, depth: &[f32], w: usize) -> Vec<u8> {
+        depth.iter().enumerate().map(|(i, &d)| self.member(i, w, 1.0 / d as f64).map_or(0, |s| s as u8 + 1)).collect()
+    }
+}
+
+/// Finds the surfaces around the `hole` from the disparity `disp` of the `known` pixels within a
+/// band around it. Planes that the chosen visibility order would show where the band says another
+/// surface is are dropped (a plane fitted to a nearby object's face must not cover the hole).
+pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h: usize, seed: u64) -> Surfaces {
+    let holes = hole.iter().filter(|&&m| m).count();
+    let empty = Surfaces { planes: Vec::new(), nearest_first: true, lo: 0.0, hi: 0.0 };
+    if holes == 0 {
+        return empty;
+    }
+    let radius = (0.3 * (holes as f32).sqrt()).clamp(4.0, 48.0);
+    let dist = distance_to(hole, w, h);
+    let band: Vec<bool> =
+        (0..w * h).map(|i| known[i] && !hole[i] && dist[i] <= radius && disp[i] > 0.0 && disp[i].is_finite()).collect();
+    let in_band: Vec<usize> = (0..w * h).filter(|&i| band[i]).collect();
+    if in_band.len() < 12 {
+        return empty;
+    }
+    let min_inliers = (in_band.len() * 3 / 20).max(12);
+    let planes = fit_planes(disp, &band, w, PLANE_TOLERANCE, MAX_PLANES, min_inliers, seed);
+    let (lo, hi) =
+        in_band.iter().fold((f64::INFINITY, 0f64), |(lo, hi), &i| (lo.min(disp[i] as f64), hi.max(disp[i] as f64)));
+    let mut s = Surfaces { planes, nearest_first: true, lo: 0.5 * lo, hi: 2.0 * hi };
+    loop {
+        let members: Vec<(usize, usize)> =
+            in_band.iter().filter_map(|&i| s.member(i, w, disp[i] as f64).map(|m| (i, m))).collect();
+        let agreement =
+            |s: &Surfaces| members.iter().filter(|&&(i, m)| s.visible(i, w).map(|v| v.0) == Some(m)).count();
+        let nearest = agreement(&Surfaces { nearest_first: true, ..s.clone() });
+        let farthest = agreement(&Surfaces { nearest_first: false, ..s.clone() });
+        s.nearest_first = nearest >= farthest;
+        // the share of the band pixels each plane is shown at that really lie on it
+        let mut shown = vec![0usize; s.planes.len()];
+        let mut right = vec![0usize; s.planes.len()];
+        for &(i, m) in &members {
+            if let Some((v, _)) = s.visible(i, w) {
+                shown[v] += 1;
+                right[v] += (v == m) as usize;
+            }
+        }
+        let worst = (0..s.planes.len())
+            .filter(|&k| shown[k] > 0)
+            .map(|k| (k, right[k] as f64 / shown[k] as f64))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match worst {
+            Some((k, share)) if share < 0.5 => {
+                s.planes.remove(k);
+            }
+            _ => return s,
+        }
+    }
+}
+
+/// Fills the `fill` pixels of the planar `channels`-channel `image` (w x h): a pixel labelled with
+/// surface s (`labels`, 0 = none) takes the harmonic interpolant of the known pixels of surface s
+/// only; unlabelled ones that of all known pixels. Worked in a window around the fill.
+pub fn fill_by_surface(image: &[f32], fill: &[bool], labels: &[u8], w: usize, h: usize, channels: usize) -> Vec<f32> {
+    let known: Vec<bool> = fill.iter().map(|&m| !m).collect();
+    let mut out = harmonic_fill(image, &known, w, h, channels);
+    let Some(b) = bounding_box(fill, w) else { return out };
+    let (mx, my) = (b.width().max(16), b.height().max(16));
+    let win = Rect {
+        x0: b.x0.saturating_sub(mx),
+        y0: b.y0.saturating_sub(my),
+        x1: (b.x1 + mx).min(w),
+        y1: (b.y1 + my).min(h),
+    };
+    let (cw, ch) = (win.width(), win.height());
+    let at = |x: usize, y: usize| (win.y0 + y) * w + win.x0 + x;
+    let surfaces = labels.iter().copied().max().unwrap_or(0);
+    for s in 1..=surfaces {
+        let targets = (0..cw * ch).filter(|&k| fill[at(k % cw, k / cw)] && labels[at(k % cw, k / cw)] == s).count();
+        let known_s: Vec<bool> =
+            (0..cw * ch).map(|k| !fill[at(k % cw, k / cw)] && labels[at(k % cw, k / cw)] == s).collect();
+        if targets == 0 || !known_s.iter().any(|&k| k) {
+            continue;
+        }
+        let mut crop = vec![0f32; channels * cw * ch];
+        for c in 0..channels {
+            for k in 0..cw * ch {
+                crop[c * cw * ch + k] = image[c * w * h + at(k % cw, k / cw)];
+            }
+        }
+        let filled = harmonic_fill(&crop, &known_s, cw, ch, channels);
+        for k in 0..cw * ch {
+            let p = at(k % cw, k / cw);
+            if fill[p] && labels[p] == s {
+                for c in 0..channels {
+                    out[c * w * h + p] = filled[c * cw * ch + k];
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A floor (bottom) meeting a wall (top) at a crease, seen from inside the room: disparity is
+    /// the larger of the two planes' (the nearer surface).
+    fn room(w: usize, h: usize) -> (Plane, Plane, Vec<f32>) {
+        let floor = Plane { a: 0.0005, b: 0.006, c: 0.05 };
+        let wall = Plane { a: -0.0004, b: 0.0002, c: 0.25 };
+        let d = (0..w * h)
+            .map(|i| {
+                let (x, y) = center(i, w);
+                floor.disparity(x, y).max(wall.disparity(x, y)) as f32
+            })
+            .collect();
+        (floor, wall, d)
+    }
+
+    #[test]
+    fn ransac_finds_both_planes_and_the_crease() {
+        let (w, h) = (64, 48);
+        let (floor, wall, disp) = room(w, h);
+        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
+        let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+        let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+        assert_eq!(s.planes.len(), 2, "{:?}", s.planes);
+        assert!(s.nearest_first);
+        for p in &s.planes {
+            let truth = if (p.b - floor.b).abs() < (p.b - wall.b).abs() { floor } else { wall };
+            // the same disparity over the whole image (the data are f32)
+            for (x, y) in [(0.0, 0.0), (64.0, 0.0), (0.0, 48.0), (64.0, 48.0)] {
+                let (d, t) = (p.disparity(x, y), truth.disparity(x, y));
+                assert!((d - t).abs() < 1e-5 * t.abs(), "{p:?} vs {truth:?} at ({x}, {y})");
+            }
+        }
+        // every hole pixel gets the exact disparity of the nearer plane
+        for i in (0..w * h).filter(|&i| hole[i]) {
+            let (_, d) = s.visible(i, w).unwrap();
+            assert!((d - disp[i] as f64).abs() < 1e-6 * disp[i] as f64, "pixel {i}: {d} vs {}", disp[i]);
+        }
+        // the same corner seen from outside (the farther plane in front) flips the order
+        let convex: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = center(i, w);
+                floor.disparity(x, y).min(wall.disparity(x, y)) as f32
+            })
+            .collect();
+        let s = surfaces_around(&convex, &known, &hole, w, h, 7);
+        assert!(!s.nearest_first);
+        for i in (0..w * h).filter(|&i| hole[i]) {
+            let (_, d) = s.visible(i, w).unwrap();
+            assert!((d - convex[i] as f64).abs() < 1e-6 * convex[i] as f64);
+        }
+    }
+
+    #[test]
+    fn colors_do_not_cross_surfaces() {
+        let (w, h) = (64, 48);
+        let (_, _, disp) = room(w, h);
+        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
+        let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+        let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+        let depth: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
+        let labels = s.labels(&depth, w);
+        // one color per surface
+        let image: Vec<f32> = (0..3 * w * h)
+            .map(|k| {
+                let i = k % (w * h);
+                let on = labels[i] as usize;
+                [0.0, 0.2 + 0.3 * (k / (w * h)) as f32, 0.9 - 0.2 * (k / (w * h)) as f32][on]
+            })
+            .collect();
+        assert!(labels.iter().all(|&l| l > 0));
+        let filled = fill_by_surface(&image, &hole, &labels, w, h, 3);
+        for k in 0..3 * w * h {
+            assert!(
+                (filled[k] - image[k]).abs() < 1e-5,
+                "channel {} pixel {}: {} vs {}",
+                k / (w * h),
+                k % (w * h),
+                filled[k],
+                image[k]
+            );
+        }
+        // a plain harmonic fill mixes them
+        let plain = harmonic_fill(&image, &known, w, h, 3);
+        assert!((0..3 * w * h).any(|k| (plain[k] - image[k]).abs() > 0.05));
+    }
+}
