@@ -7,6 +7,7 @@ use cogeo::io::{write_exr, write_png_gray, write_png_rgb};
 use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
 use cogeo::scene::{camera, colmap, ply, Camera, GaussianScene};
 use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 #[derive(Parser)]
@@ -471,6 +472,11 @@ struct SynthArgs {
     /// stay visible there, unlike in gt_background/).
     #[arg(long, value_delimiter = ',')]
     gt_without: Vec<u8>,
+    /// Color rays per pixel side: each pixel is the mean of N x N rays over its area, as a camera
+    /// integrates light (anti-aliased textures that look the same from every view); 1 = one ray
+    /// through the pixel center. Depth, masks and points always use the center ray.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
+    supersample: u32,
 }
 
 fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
@@ -1049,6 +1055,7 @@ fn cmd_synth(a: SynthArgs) -> Result<()> {
         seed: a.seed,
         points_per_view: a.points_per_view.unwrap_or((a.width * a.height / 12) as usize),
         gt_without: a.gt_without.clone(),
+        supersample: a.supersample,
     };
     let bar = progress(2 * a.views, "synth");
     let objects = cogeo::synth::generate(&cfg, &a.out, &|done, _| bar.set_position(done as u64))?;
@@ -1119,6 +1126,9 @@ fn cmd_train(a: TrainArgs) -> Result<()> {
     let start = std::time::Instant::now();
     let first_step = t.step;
     let mut test_psnr = None;
+    // Without a terminal (a pipe, a log file, CI) the bar draws nothing: print a plain line about
+    // every 5 % of the run instead, on the steps that read the loss back anyway.
+    let plain_every = (!std::io::stderr().is_terminal()).then(|| (a.iters / 20 / 50).max(1) * 50);
     while t.step < a.iters {
         let log = (t.step + 1) % 50 == 0;
         t.iterate(&data, log)?;
@@ -1128,7 +1138,11 @@ fn cmd_train(a: TrainArgs) -> Result<()> {
         }
         if let Some((loss, l1)) = t.last_loss.filter(|_| log) {
             let psnr = test_psnr.map(|p| format!(" test PSNR {p:.2}")).unwrap_or_default();
-            bar.set_message(format!("loss {loss:.4} L1 {l1:.4}{psnr} | {} Gaussians", t.num_gaussians()));
+            let msg = format!("loss {loss:.4} L1 {l1:.4}{psnr} | {} Gaussians", t.num_gaussians());
+            if plain_every.is_some_and(|n| t.step % n == 0) {
+                eprintln!("train {}/{} {:.0} s {msg}", t.step, a.iters, start.elapsed().as_secs_f64());
+            }
+            bar.set_message(msg);
         }
         bar.set_position(t.step as u64);
     }

@@ -72,6 +72,11 @@ pub struct SynthConfig {
     /// Also write the ground truth of removing just these objects (`without_<labels>/`); empty:
     /// only the all-objects-removed ground truth.
     pub gt_without: Vec<u8>,
+    /// Color samples per pixel side: each pixel's color is the mean of `supersample`^2 rays on a
+    /// regular grid over its area (a camera integrates light over the pixel; 1 = the pixel center
+    /// only, which aliases fine texture differently in every view). Depth, labels and points stay
+    /// at the pixel center.
+    pub supersample: u32,
 }
 
 /// Where a synth dataset keeps the ground truth of removing `labels`: the scene ray-cast without
@@ -299,8 +304,10 @@ pub struct ViewRender {
     pub labels: Vec<u8>,
 }
 
-/// Ray-casts one camera (pixel centers).
-pub fn render_view(cam: &Camera, objects: &[Object], seed: u64) -> ViewRender {
+/// Ray-casts one camera: depth, label and surface point at each pixel center, color as the mean of
+/// `supersample`^2 rays spread evenly over the pixel (1: the center ray only).
+pub fn render_view(cam: &Camera, objects: &[Object], seed: u64, supersample: u32) -> ViewRender {
+    let s = supersample.max(1);
     let (w, h) = (cam.width as usize, cam.height as usize);
     let center = cam.center();
     let r = cam.rotation;
@@ -315,18 +322,32 @@ pub fn render_view(cam: &Camera, objects: &[Object], seed: u64) -> ViewRender {
                     points: Vec::with_capacity(w),
                     labels: vec![0; w],
                 };
-                for x in 0..w {
-                    let cx = (x as f64 + 0.5 - cam.cx) / cam.fx;
-                    let cy = (y as f64 + 0.5 - cam.cy) / cam.fy;
+                let ray = |px: f64, py: f64| {
+                    let cx = (px - cam.cx) / cam.fx;
+                    let cy = (py - cam.cy) / cam.fy;
                     // camera ray (cx, cy, 1) to world: R^T
                     let dc = [cx, cy, 1.0];
-                    let dw = [
+                    norm([
                         r[0][0] * dc[0] + r[1][0] * dc[1] + r[2][0] * dc[2],
                         r[0][1] * dc[0] + r[1][1] * dc[1] + r[2][1] * dc[2],
                         r[0][2] * dc[0] + r[1][2] * dc[1] + r[2][2] * dc[2],
-                    ];
-                    let hit = trace(center, norm(dw), objects, seed);
-                    let c = shade(&hit);
+                    ])
+                };
+                for x in 0..w {
+                    let hit = trace(center, ray(x as f64 + 0.5, y as f64 + 0.5), objects, seed);
+                    let c = if s == 1 {
+                        shade(&hit)
+                    } else {
+                        let mut sum = [0.0; 3];
+                        for sy in 0..s {
+                            for sx in 0..s {
+                                let px = x as f64 + (sx as f64 + 0.5) / s as f64;
+                                let py = y as f64 + (sy as f64 + 0.5) / s as f64;
+                                sum = add(sum, shade(&trace(center, ray(px, py), objects, seed)));
+                            }
+                        }
+                        scale(sum, 1.0 / (s * s) as f64)
+                    };
                     for ch in 0..3 {
                         out.rgb[ch * w + x] = c[ch] as f32;
                     }
@@ -477,10 +498,10 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     let mut without_subset = Vec::new();
     let kept: Vec<Object> = objects.iter().filter(|o| !cfg.gt_without.contains(&o.label)).cloned().collect();
     for (i, cam) in cameras.iter().enumerate() {
-        with_objects.push(render_view(cam, &objects, cfg.seed));
-        background.push(render_view(cam, &[], cfg.seed));
+        with_objects.push(render_view(cam, &objects, cfg.seed, cfg.supersample));
+        background.push(render_view(cam, &[], cfg.seed, cfg.supersample));
         if subset_dir.is_some() {
-            without_subset.push(render_view(cam, &kept, cfg.seed));
+            without_subset.push(render_view(cam, &kept, cfg.seed, cfg.supersample));
         }
         progress(i + 1, 2 * cameras.len());
     }
