@@ -96,3 +96,26 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap());
     v[v.len() / 2]
 }
+
+/// Runs the `cogeo` binary of this build with `args`, panics with its stderr when it fails, and
+/// returns the wall time in seconds (also printed with the command line).
+pub fn cogeo(args: &[String]) -> f64 {
+    let t = std::time::Instant::now();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cogeo")).args(args).output().expect("cannot run cogeo");
+    if !out.status.success() {
+        panic!("cogeo {} failed:\n{}", args.join(" "), String::from_utf8_lossy(&out.stderr));
+    }
+    let seconds = t.elapsed().as_secs_f64();
+    eprintln!("  {seconds:>7.1} s  cogeo {}", args.join(" "));
+    seconds
+}
+
+pub fn read_json(p: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display())))
+        .unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Owned copies of string literals, for argument lists.
+pub fn s(v: &[&str]) -> Vec<String> {
+    v.iter().map(|x| x.to_string()).collect()
+}

@@ -14,9 +14,10 @@
 #[path = "common.rs"]
 mod common;
 
+use common::{cogeo, read_json, s};
+
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 struct SceneSpec {
     name: &'static str,
@@ -41,23 +42,6 @@ const VARIANTS: [(&str, &str, &[&str]); 7] = [
     ("no refinement", "vote", &["--no-refine"]),
     ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),
 ];
-
-fn cogeo(args: &[String]) {
-    let t = std::time::Instant::now();
-    let out = Command::new(env!("CARGO_BIN_EXE_cogeo")).args(args).output().expect("cannot run cogeo");
-    if !out.status.success() {
-        panic!("cogeo {} failed:\n{}", args.join(" "), String::from_utf8_lossy(&out.stderr));
-    }
-    eprintln!("  {:>6.1} s  cogeo {}", t.elapsed().as_secs_f64(), args.join(" "));
-}
-
-fn read_json(p: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))).unwrap()
-}
-
-fn s(v: &[&str]) -> Vec<String> {
-    v.iter().map(|x| x.to_string()).collect()
-}
 
 fn num(v: &Value, digits: usize) -> String {
     match v.as_f64() {

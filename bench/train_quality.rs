@@ -17,31 +17,12 @@
 #[path = "common.rs"]
 mod common;
 
+use common::{cogeo, read_json, s};
+
 use serde_json::{json, Value};
 use std::path::Path;
-use std::process::Command;
-use std::time::Instant;
 
 const SYNTH_TARGET_PSNR: f64 = 28.0;
-
-fn cogeo(args: &[String]) -> f64 {
-    let t = Instant::now();
-    let out = Command::new(env!("CARGO_BIN_EXE_cogeo")).args(args).output().expect("cannot run cogeo");
-    if !out.status.success() {
-        panic!("cogeo {} failed:\n{}", args.join(" "), String::from_utf8_lossy(&out.stderr));
-    }
-    let s = t.elapsed().as_secs_f64();
-    eprintln!("  {s:>7.1} s  cogeo {}", args.join(" "));
-    s
-}
-
-fn read_json(p: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))).unwrap()
-}
-
-fn s(v: &[&str]) -> Vec<String> {
-    v.iter().map(|x| x.to_string()).collect()
-}
 
 /// Trains `data` into `out` and returns the row of the table.
 fn train(name: &str, data: &Path, out: &Path, extra: &[String]) -> Value {
