@@ -23,13 +23,13 @@ fn config() -> SynthConfig {
 fn supersampled_pixels_are_box_filtered_finer_pixels() {
     let cfg = config();
     let objects = make_objects(cfg.objects, &mut Rng::new(cfg.seed));
-    let n = 3usize;
+    let n = cfg.supersample as usize;
     let mut compared = 0usize;
     let mut mismatched = 0usize;
     let mut textured = 0usize;
     for cam in make_cameras(&cfg).iter().take(2) {
         let (w, h) = (cam.width as usize, cam.height as usize);
-        let coarse = render_view(cam, &objects, cfg.seed, n as u32);
+        let coarse = render_view(cam, &objects, cfg.seed, cfg.supersample);
         let fine_cam = cam.resized(cam.width * n as u32, cam.height * n as u32);
         let fine = render_view(&fine_cam, &objects, cfg.seed, 1);
         let center = render_view(cam, &objects, cfg.seed, 1);
