@@ -281,7 +281,7 @@ fn eval_cli_on_a_synth_dataset() {
     assert!(fid_got > 0.0);
 
     // floaters: a Gaussian on the true background behind object 1 and one in front of it
-    let ds = cogeo::train::dataset::load(std::path::Path::new(&data), "images").unwrap();
+    let ds = cogeo::train::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
     let cam = ds.train.iter().map(|v| &v.camera).find(|c| {
         let mask = image::open(format!("{masks}/{}.png", c.name)).unwrap().to_luma8();
         mask.pixels().any(|p| p[0] == 1)

@@ -214,7 +214,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
     out["floaters"] = match (&cfg.data, &cfg.scene) {
         (Some(data), Some(scene_path)) => {
             let scene = crate::scene::ply::read_ply(scene_path)?;
-            let ds = crate::train::dataset::load(data, "images")?;
+            let ds = crate::train::dataset::load(data, "images", 1)?;
             let (mut cams, mut depths, mut regions) = (vec![], vec![], vec![]);
             for v in ds.train.iter().chain(&ds.test) {
                 let c = &v.camera;

@@ -1,6 +1,8 @@
 //! Training data: a COLMAP model plus an image folder (`images`, or a Mip-NeRF 360 style `images_2`,
 //! `images_4`, ... holding downscaled copies: intrinsics are scaled to the actual image size), with
-//! the Mip-NeRF 360 split (every 8th view, 0, 8, 16, ..., held out for testing).
+//! the Mip-NeRF 360 split (every 8th view, 0, 8, 16, ..., held out for testing). A `downscale`
+//! factor N box-filters every image by N x N pixels on load (as `-r N` in the INRIA code), so a
+//! capture can be trained, tagged and edited at a lower resolution without writing a copy of it.
 
 use crate::scene::colmap::{read_colmap, Point3D};
 use crate::scene::Camera;
@@ -49,8 +51,35 @@ pub fn is_test_view(index: usize) -> bool {
     index % 8 == 0
 }
 
-/// Loads `dir` (COLMAP model in `dir` or `dir/sparse/0`) with images from `dir/<images>`.
-pub fn load(dir: &Path, images: &str) -> Result<Dataset> {
+/// Averages each `n` x `n` block of a planar RGB image (`w` x `h`); a partial block at the right or
+/// bottom edge is dropped, so output pixel (x, y) covers input pixels [n x, n x + n) x [n y, n y + n).
+pub fn box_downscale(w: u32, h: u32, rgb: &[f32], n: u32) -> (u32, u32, Vec<f32>) {
+    let (ow, oh) = (w / n, h / n);
+    let (w, h, n, ow, oh) = (w as usize, h as usize, n as usize, ow as usize, oh as usize);
+    let mut out = vec![0f32; 3 * ow * oh];
+    let norm = 1.0 / (n * n) as f64;
+    for c in 0..3 {
+        let plane = &rgb[c * w * h..(c + 1) * w * h];
+        for y in 0..oh {
+            for x in 0..ow {
+                let mut sum = 0.0f64;
+                for sy in 0..n {
+                    let row = &plane[(y * n + sy) * w + x * n..][..n];
+                    sum += row.iter().map(|&v| v as f64).sum::<f64>();
+                }
+                out[c * ow * oh + y * ow + x] = (sum * norm) as f32;
+            }
+        }
+    }
+    (ow as u32, oh as u32, out)
+}
+
+/// Loads `dir` (COLMAP model in `dir` or `dir/sparse/0`) with images from `dir/<images>`, each
+/// box-filtered by `downscale` (1 = as stored); intrinsics follow the images.
+pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
+    if downscale == 0 {
+        bail!("the downscale factor must be at least 1");
+    }
     let model = read_colmap(dir)?;
     let image_dir = dir.join(images);
     if !image_dir.is_dir() {
@@ -77,6 +106,26 @@ pub fn load(dir: &Path, images: &str) -> Result<Dataset> {
             cam.resized(w, h)
         } else {
             cam.clone()
+        };
+        let (camera, rgb) = if downscale > 1 {
+            let (dw, dh, small) = box_downscale(w, h, &rgb, downscale);
+            if dw < 8 || dh < 8 {
+                bail!("{}: {w}x{h} downscaled by {downscale} leaves {dw}x{dh} pixels", path.display());
+            }
+            // pixel x of the small image spans x * n .. x * n + n of the loaded one: intrinsics / n
+            let n = downscale as f64;
+            let c = Camera {
+                width: dw,
+                height: dh,
+                fx: camera.fx / n,
+                fy: camera.fy / n,
+                cx: camera.cx / n,
+                cy: camera.cy / n,
+                ..camera
+            };
+            (c, small)
+        } else {
+            (camera, rgb)
         };
         let view = View { camera, image: rgb, path };
         if is_test_view(i) {
