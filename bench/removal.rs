@@ -4,12 +4,15 @@
 //! truth with `cogeo eval`.
 //!
 //!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
-//!                                  --width 64 --height 48 --views 16
+//!                                  --width 64 --height 48 --views 16 --supersample 1 --repeat-full
 //!                                  --lpips-model lpips.onnx --fid-model inception.onnx --no-readme]
 //!
 //! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
 //! removal only, cogeo, ground truth on one held-out view), and replaces the table between the
-//! `removal-table` markers of README.md (unless --no-readme).
+//! `removal-table` markers of README.md (unless --no-readme). `--supersample N` makes the scenes with
+//! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
+//! pipeline a second time on the same trained scene, which shows the run-to-run spread (float
+//! atomics in the GPU passes) that any difference between variants must exceed.
 
 #[path = "common.rs"]
 mod common;
@@ -57,6 +60,12 @@ fn main() {
         arg("--scenes", "one,two-of-three,three-of-four").split(',').map(str::to_string).collect();
     let (iters, width, height, views) =
         (arg("--iters", "500"), arg("--width", "64"), arg("--height", "48"), arg("--views", "16"));
+    let supersample = arg("--supersample", "1");
+    let repeat_full = args.iter().any(|a| a == "--repeat-full");
+    let mut variants: Vec<(&str, &str, &[&str])> = VARIANTS.to_vec();
+    if repeat_full {
+        variants.insert(1, ("cogeo (full, second run)", "vote", &[]));
+    }
     let lpips = common::arg(&args, "--lpips-model");
     let fid = common::arg(&args, "--fid-model");
     let root = std::env::temp_dir().join(format!("cogeo_bench_removal_{}", std::process::id()));
@@ -84,6 +93,8 @@ fn main() {
             &spec.seed.to_string(),
             "--gt-without",
             spec.labels,
+            "--supersample",
+            &supersample,
         ]));
         let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
         let truth = cogeo::synth::ground_truth(&data, &labels);
@@ -121,7 +132,7 @@ fn main() {
                 &p(&dir.join(format!("tagged_{method}.ply"))),
             ]));
         }
-        for (k, (variant, method, extra)) in VARIANTS.iter().enumerate() {
+        for (k, (variant, method, extra)) in variants.iter().enumerate() {
             let out = dir.join(format!("variant_{k}"));
             let mut a = s(&[
                 "remove",
@@ -172,16 +183,27 @@ fn main() {
                 "background_psnr_vs_original": report["background_psnr_vs_original"]["mean"],
             }));
         }
-        // VARIANTS[0] is the full pipeline, VARIANTS[1] removal only
+        // variant 0 is the full pipeline
+        let only = variants.iter().position(|v| v.0 == "removal only").unwrap();
         if spec.name == "two-of-three" || example.is_none() {
-            example =
-                Some((data.clone(), truth.images.clone(), dir.join("variant_1"), dir.join("variant_0"), spec.name));
+            example = Some((
+                data.clone(),
+                truth.images.clone(),
+                dir.join(format!("variant_{only}")),
+                dir.join("variant_0"),
+                spec.name,
+            ));
         }
     }
     // the table
+    let rays = if supersample == "1" {
+        "one ray per pixel".to_string()
+    } else {
+        format!("{supersample}x{supersample} rays per pixel")
+    };
     let mut md = format!(
-        "Removal on `cogeo synth` scenes ({width}x{height}, {views} views, every 8th held out; {iters} training \
-         iterations; vote tags unless noted), `cargo bench --bench removal`, on {device}. Held-out views against \
+        "Removal on `cogeo synth` scenes ({width}x{height}, {rays}, {views} views, every 8th held out; {iters} \
+         training iterations; vote tags unless noted), `cargo bench --bench removal`, on {device}. Held-out views against \
          the exact ground truth (the scene ray-cast without the removed objects only): PSNR/SSIM inside the removed objects' silhouettes (mask), on the \
          silhouettes' bounding box (bbox), on the never-seen part of the mask; leftover = share of mask pixels that \
          still look like the object; floaters = opacity-weighted count of Gaussians off the true surface by more than \
@@ -207,7 +229,7 @@ fn main() {
         );
     }
     md += "\nMean over the scenes:\n\n| variant | masked PSNR | masked SSIM | bbox PSNR |\n|---|---:|---:|---:|\n";
-    for (variant, _, _) in VARIANTS.iter() {
+    for (variant, _, _) in variants.iter() {
         let sel: Vec<&Value> = rows.iter().filter(|r| r["variant"] == *variant).collect();
         let mean = |f: &dyn Fn(&Value) -> Option<f64>| {
             let v: Vec<f64> = sel.iter().filter_map(|r| f(&r["metrics"])).collect();
@@ -246,10 +268,11 @@ fn main() {
         .filter(|w| !w.is_empty())
         .take(3)
         .collect::<Vec<_>>()
-        .join("-");
+        .join("-")
+        + &if supersample == "1" { String::new() } else { format!("-aa{supersample}") };
     common::write_json(
         &common::results_path(&format!("removal-{slug}.json")),
-        &json!({ "device": device, "rows": rows }),
+        &json!({ "device": device, "supersample": supersample, "rows": rows }),
     );
     let md_path = common::results_path(&format!("removal-{slug}.md"));
     std::fs::write(&md_path, &md).unwrap();
@@ -273,11 +296,12 @@ fn main() {
                 }
             }
         }
-        let path = common::results_path("removal-example.png");
+        let name = format!("removal-example{}.png", &slug[slug.find("-aa").unwrap_or(slug.len())..]);
+        let path = common::results_path(&name);
         strip.save(&path).unwrap();
         println!("wrote {}", path.display());
         image_line = format!(
-            "\n![input, removal only, cogeo, ground truth](bench/results/removal-example.png)\n\n\
+            "\n![input, removal only, cogeo, ground truth](bench/results/{name})\n\n\
              Held-out view {first} of the {scene} scene: input, removal only, cogeo, ground truth.\n"
         );
     }

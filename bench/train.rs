@@ -34,6 +34,7 @@ fn main() {
             points: Vec::new(),
             extent: 3.0,
             warnings: Vec::new(),
+            pose_check: None,
         };
         let cfg = TrainConfig { iters: 30_000, densify: false, ..Default::default() };
         let mut trainer = Trainer::new(&gpu, &data, &scene, cfg).unwrap();

@@ -120,7 +120,8 @@ struct RenderArgs {
     /// INRIA cameras.json with the views to render.
     #[arg(long, conflicts_with_all = ["colmap", "builtin"], required_unless_present_any = ["colmap", "builtin"])]
     cameras: Option<PathBuf>,
-    /// COLMAP model folder (containing cameras/images .bin or .txt, or sparse/0 with them).
+    /// COLMAP model folder (containing cameras/images .bin or .txt, or sparse/0 with them). Its poses
+    /// are checked against the images in `images/` beside the model when that folder exists.
     #[arg(long, conflicts_with = "builtin")]
     colmap: Option<PathBuf>,
     /// Output folder (created if missing); files are written atomically.
@@ -614,7 +615,12 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         camera::read_cameras_json(path)?
     } else {
         let dir = a.colmap.as_ref().unwrap();
-        let model = colmap::read_colmap(dir)?;
+        let mut model = colmap::read_colmap(dir)?;
+        // the same pose check as training, against the full-size images where they are
+        let image_dir = dir.join("images");
+        if image_dir.is_dir() {
+            cogeo::train::dataset::repair_rotations(&mut model, dir, &image_dir)?;
+        }
         for w in &model.warnings {
             eprintln!("warning: {w}");
         }

@@ -52,7 +52,7 @@ pub fn refine(
         .zip(targets)
         .map(|(c, image)| View { camera: c.clone(), image, path: format!("<completed {}>", c.name).into() })
         .collect();
-    let data = Dataset { train, test: Vec::new(), points: Vec::new(), extent, warnings: Vec::new() };
+    let data = Dataset { train, test: Vec::new(), points: Vec::new(), extent, warnings: Vec::new(), pose_check: None };
     let tcfg = TrainConfig {
         iters: cfg.iters.max(1),
         sh_degree: scene.sh_degree,

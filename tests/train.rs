@@ -136,6 +136,7 @@ fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
         points: vec![],
         extent: 2.0,
         warnings: vec![],
+        pose_check: None,
     };
     let cfg = TrainConfig { iters: 100, densify: false, ..Default::default() };
     let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();

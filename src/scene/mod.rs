@@ -3,6 +3,7 @@
 pub mod camera;
 pub mod colmap;
 pub mod ply;
+pub mod pose_check;
 
 pub use camera::Camera;
 

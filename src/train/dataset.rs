@@ -4,7 +4,8 @@
 //! factor N box-filters every image by N x N pixels on load (as `-r N` in the INRIA code), so a
 //! capture can be trained, tagged and edited at a lower resolution without writing a copy of it.
 
-use crate::scene::colmap::{read_colmap, Point3D};
+use crate::scene::colmap::{read_colmap, ColmapModel, Point3D};
+use crate::scene::pose_check::{check_rotations, with_transposed_rotation, RotationCheck};
 use crate::scene::Camera;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -23,6 +24,8 @@ pub struct Dataset {
     /// Radius of the camera centers around their mean, times 1.1 (INRIA's scene extent).
     pub extent: f64,
     pub warnings: Vec<String>,
+    /// The poses measured against the images (scene/pose_check.rs), when points carry colors.
+    pub pose_check: Option<RotationCheck>,
 }
 
 const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "PNG", "JPG"];
@@ -49,6 +52,47 @@ pub fn load_rgb(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
 /// Is view `index` (in name order) a held-out test view?
 pub fn is_test_view(index: usize) -> bool {
     index % 8 == 0
+}
+
+/// Checks the model's poses against up to 8 of its images in `image_dir` (scene/pose_check.rs).
+/// Rotations stored transposed (camera-to-world quaternions beside world-to-camera translations)
+/// are transposed back, with a warning; poses that agree with the images under neither reading
+/// get a warning. Returns the measurement (None: no images or no colored points to compare).
+pub fn repair_rotations(model: &mut ColmapModel, dir: &Path, image_dir: &Path) -> Result<Option<RotationCheck>> {
+    let n = model.cameras.len();
+    let picks: Vec<usize> = (0..n.min(8)).map(|k| k * n / n.min(8)).collect();
+    let (mut cams, mut images) = (Vec::new(), Vec::new());
+    for &i in &picks {
+        let cam = &model.cameras[i];
+        let Some(path) = find_image(image_dir, &cam.name) else { continue };
+        let (w, h, rgb) = load_rgb(&path)?;
+        cams.push(cam.resized(w, h));
+        images.push(rgb);
+    }
+    let Some(check) = check_rotations(&cams, &images, &model.points, 4000) else { return Ok(None) };
+    if check.transposed_rotations() {
+        for c in &mut model.cameras {
+            *c = with_transposed_rotation(c);
+        }
+        model.warnings.push(format!(
+            "{}: the COLMAP rotations disagree with the images (sparse point colors off by {:.3} on average, \
+             {:.3} against unrelated pixels) while their transposes agree ({:.3}): the quaternions look like \
+             camera-to-world rotations written beside world-to-camera translations; using the transposed rotations",
+            dir.display(),
+            check.stored,
+            check.chance,
+            check.transposed
+        ));
+    } else if check.disagrees() {
+        model.warnings.push(format!(
+            "{}: the sparse points' colors do not match the images under these poses (off by {:.3} on average, \
+             {:.3} against unrelated pixels); training will blur if the poses are wrong",
+            dir.display(),
+            check.stored,
+            check.chance
+        ));
+    }
+    Ok(Some(check))
 }
 
 /// Averages each `n` x `n` block of a planar RGB image (`w` x `h`); a partial block at the right or
@@ -80,11 +124,12 @@ pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
     if downscale == 0 {
         bail!("the downscale factor must be at least 1");
     }
-    let model = read_colmap(dir)?;
+    let mut model = read_colmap(dir)?;
     let image_dir = dir.join(images);
     if !image_dir.is_dir() {
         bail!("{}: image folder not found", image_dir.display());
     }
+    let pose_check = repair_rotations(&mut model, dir, &image_dir)?;
     let mut train = Vec::new();
     let mut test = Vec::new();
     for (i, cam) in model.cameras.iter().enumerate() {
@@ -143,5 +188,12 @@ pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
         .iter()
         .map(|c| ((c[0] - mean[0]).powi(2) + (c[1] - mean[1]).powi(2) + (c[2] - mean[2]).powi(2)).sqrt())
         .fold(0.0, f64::max);
-    Ok(Dataset { train, test, points: model.points, extent: (radius * 1.1).max(1e-3), warnings: model.warnings })
+    Ok(Dataset {
+        train,
+        test,
+        points: model.points,
+        extent: (radius * 1.1).max(1e-3),
+        warnings: model.warnings,
+        pose_check,
+    })
 }
