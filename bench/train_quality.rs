@@ -4,7 +4,8 @@
 //!
 //!   cargo bench --bench train_quality [-- --width 64 --height 48 --views 32 --seed 1
 //!       --iters 1500 --sh-degree 1 --strategy mcmc --max-gaussians 15000 --supersample 4,1
-//!       --statue ../shared/data/statue --statue-images images_2 --statue-iters 1000 --no-synth]
+//!       --statue ../shared/data/statue --statue-images images_2 --statue-downscale 2
+//!       --statue-iters 1000 --no-synth]
 //!
 //! `--supersample 4,1` trains the synth scene twice: rendered with 4x4 rays per pixel (what a
 //! camera records) and with one ray through each pixel center (fine texture aliases differently in
@@ -85,12 +86,17 @@ fn main() {
     }
     if let Some(statue) = common::arg(&args, "--statue") {
         let (images, iters) = (arg("--statue-images", "images_2"), arg("--statue-iters", "1000"));
-        let name = format!("{} ({images})", Path::new(&statue).file_name().unwrap_or_default().to_string_lossy());
+        let downscale = arg("--statue-downscale", "1");
+        let mut name = format!("{} ({images}", Path::new(&statue).file_name().unwrap_or_default().to_string_lossy());
+        if downscale != "1" {
+            name += &format!(" / {downscale}");
+        }
+        name += ")";
         rows.push(train(
             &name,
             Path::new(&statue),
             &root.join("statue-train"),
-            &s(&["--images", &images, "--iters", &iters]),
+            &s(&["--images", &images, "--downscale", &downscale, "--iters", &iters]),
         ));
     }
     println!();

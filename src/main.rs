@@ -183,6 +183,16 @@ struct DemoArgs {
     device: DeviceArgs,
 }
 
+/// Resolution at which a capture is used (train, tag, remove and run share it).
+#[derive(Args, Clone, Copy)]
+struct ScaleArgs {
+    /// Box-filter every image by N x N pixels on load (intrinsics follow; masks are resized to the
+    /// result): train, tag and edit a capture at 1/N resolution without writing a copy. Use the same
+    /// value for train, tag and remove.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
+    downscale: u32,
+}
+
 #[derive(Args)]
 struct TrainArgs {
     /// Dataset folder: COLMAP model (here or in sparse/0) and an image folder.
@@ -194,11 +204,8 @@ struct TrainArgs {
     /// Image folder inside --data (e.g. images_2, images_4 for downscaled copies; intrinsics are scaled).
     #[arg(long, default_value = "images")]
     images: String,
-    /// Box-filter every image by N x N pixels on load (intrinsics follow; masks are resized to the
-    /// result): train, tag and edit a capture at 1/N resolution without writing a copy. Use the same
-    /// value for train, tag and remove.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
-    downscale: u32,
+    #[command(flatten)]
+    scale: ScaleArgs,
     /// Training iterations.
     #[arg(long, default_value_t = 30_000)]
     iters: u32,
@@ -246,11 +253,8 @@ struct TagArgs {
     /// Image folder inside --data (e.g. images_2); masks are resized to its images if needed.
     #[arg(long, default_value = "images")]
     images: String,
-    /// Box-filter every image by N x N pixels on load (intrinsics follow; masks are resized to the
-    /// result): train, tag and edit a capture at 1/N resolution without writing a copy. Use the same
-    /// value for train, tag and remove.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
-    downscale: u32,
+    #[command(flatten)]
+    scale: ScaleArgs,
     /// Masks: a folder of 8-bit instance maps named like the images (pixel value q = object q,
     /// 0 = background, 255 = ignore), or a folder of per-object subfolders holding binary masks
     /// (nonzero = object; objects numbered 1.. in sorted subfolder order). Relative paths are tried
@@ -410,11 +414,8 @@ struct RemoveArgs {
     /// Image folder inside --data.
     #[arg(long, default_value = "images")]
     images: String,
-    /// Box-filter every image by N x N pixels on load (intrinsics follow; masks are resized to the
-    /// result): train, tag and edit a capture at 1/N resolution without writing a copy. Use the same
-    /// value for train, tag and remove.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
-    downscale: u32,
+    #[command(flatten)]
+    scale: ScaleArgs,
     /// Output folder: scene.ply, report.json, before/ after/ removed/ inpainted/ mask/ depth/.
     #[arg(long)]
     out: PathBuf,
@@ -435,11 +436,8 @@ struct RunArgs {
     /// Image folder inside --data.
     #[arg(long, default_value = "images")]
     images: String,
-    /// Box-filter every image by N x N pixels on load (intrinsics follow; masks are resized to the
-    /// result): train, tag and edit a capture at 1/N resolution without writing a copy. Use the same
-    /// value for train, tag and remove.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
-    downscale: u32,
+    #[command(flatten)]
+    scale: ScaleArgs,
     /// Output folder: train/, tagged.ply (+ .json), removal/.
     #[arg(long)]
     out: PathBuf,
@@ -933,7 +931,7 @@ fn cmd_tag(a: TagArgs) -> Result<()> {
     if a.out.extension().and_then(|e| e.to_str()) != Some("ply") {
         bail!("{}: --out must name a .ply file", a.out.display());
     }
-    let data = cogeo::train::dataset::load(&a.data, &a.images, a.downscale)?;
+    let data = cogeo::train::dataset::load(&a.data, &a.images, a.scale.downscale)?;
     for w in &data.warnings {
         eprintln!("warning: {w}");
     }
@@ -1098,7 +1096,7 @@ fn cmd_train(a: TrainArgs) -> Result<()> {
     if a.sh_degree > 3 {
         bail!("--sh-degree must be 0..3");
     }
-    let data = dataset::load(&a.data, &a.images, a.downscale)?;
+    let data = dataset::load(&a.data, &a.images, a.scale.downscale)?;
     for w in &data.warnings {
         eprintln!("warning: {w}");
     }
@@ -1251,7 +1249,7 @@ fn cmd_remove(a: RemoveArgs) -> Result<()> {
     let scene_labels = cogeo::tag::scene_labels(&scene).ok_or_else(|| {
         anyhow!("{}: the scene has no `label` property; tag it first with `cogeo tag`", a.scene.display())
     })?;
-    let data = cogeo::train::dataset::load(&a.data, &a.images, a.downscale)?;
+    let data = cogeo::train::dataset::load(&a.data, &a.images, a.scale.downscale)?;
     // load models before any GPU work so a bad model path fails at once
     let mut completer = Completer {
         inpainter: match &f.inpaint_model {
@@ -1372,7 +1370,7 @@ fn cmd_remove(a: RemoveArgs) -> Result<()> {
     write_views(&out.join("test_before"), &test_cams, &test_before)?;
     write_views(&out.join("test_after"), &test_cams, &test_after)?;
     // synth ground truth is stored at the dataset's resolution; a downscaled run is not scored
-    let (synth, depth_error) = if a.downscale == 1 {
+    let (synth, depth_error) = if a.scale.downscale == 1 {
         let synth = cogeo::eval::synth_metrics(&a.data, &test_cams, &test_after, &labels)?;
         let depth_error = cogeo::eval::synth_depth_error(
             &a.data,
@@ -1420,7 +1418,7 @@ fn cmd_run(a: RunArgs) -> Result<()> {
         data: a.data.clone(),
         out: train_dir.clone(),
         images: a.images.clone(),
-        downscale: a.downscale,
+        scale: a.scale,
         iters: a.iters,
         resume: false,
         checkpoint_every: 0,
@@ -1439,7 +1437,7 @@ fn cmd_run(a: RunArgs) -> Result<()> {
         scene: train_dir.join("scene.ply"),
         data: a.data.clone(),
         images: a.images.clone(),
-        downscale: a.downscale,
+        scale: a.scale,
         masks: Some(a.masks.clone()),
         prompt: Vec::new(),
         detector: None,
@@ -1461,7 +1459,7 @@ fn cmd_run(a: RunArgs) -> Result<()> {
         scene: tagged,
         data: a.data,
         images: a.images,
-        downscale: a.downscale,
+        scale: a.scale,
         out: a.out.join("removal"),
         removal: a.removal,
         device: a.device,
