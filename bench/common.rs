@@ -1,8 +1,8 @@
 //! Shared pieces of the benchmarks: argument handling, synthetic scenes, result files.
 #![allow(dead_code)]
 
-use cogeo::demo::Rng;
 use cogeo::gpu::{DeviceChoice, Gpu};
+use cogeo::rng::Rng;
 use cogeo::scene::GaussianScene;
 use std::path::PathBuf;
 

@@ -8,9 +8,9 @@
 #[path = "common.rs"]
 mod common;
 
-use cogeo::demo::Rng;
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
 use cogeo::render::sort::RadixSort;
+use cogeo::rng::Rng;
 use std::time::Instant;
 
 fn main() {

@@ -8,7 +8,7 @@
 #[path = "common.rs"]
 mod common;
 
-use cogeo::demo::Rng;
+use cogeo::rng::Rng;
 use cogeo::scene::Camera;
 use cogeo::train::dataset::{Dataset, View};
 use cogeo::train::trainer::{TrainConfig, Trainer};

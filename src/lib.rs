@@ -4,10 +4,9 @@
 //! their CPU reference), `scene` (Gaussians, PLY, cameras), `train` (optimization), `tag` (object labels per Gaussian),
 //! then removal: `remove` (selection, hole masks, the pipeline), `complete` (inpainting and depth),
 //! `fuse` (new Gaussians, pruning), `refine` (trust-region refinement), `eval` (metrics), `onnx`
-//! (user-supplied models); `demo` (the built-in default scene).
+//! (user-supplied models); `rng` (seeded random numbers).
 
 pub mod complete;
-pub mod demo;
 pub mod eval;
 pub mod fuse;
 pub mod gpu;
@@ -16,6 +15,7 @@ pub mod onnx;
 pub mod refine;
 pub mod remove;
 pub mod render;
+pub mod rng;
 pub mod scene;
 pub mod synth;
 pub mod tag;

@@ -602,13 +602,13 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     let scene_path = a.scene.clone().unwrap_or_else(|| PathBuf::from("<built-in scene>"));
     let scene = match &a.scene {
         Some(p) => load_scene(p)?,
-        None => cogeo::demo::default_scene(),
+        None => cogeo::scene::builtin::default_scene(),
     };
     let cameras = if a.builtin {
         if a.views == 0 {
             bail!("--views must be positive");
         }
-        cogeo::demo::orbit_cameras(a.views, a.width.unwrap_or(640), a.height.unwrap_or(480))
+        cogeo::scene::builtin::orbit_cameras(a.views, a.width.unwrap_or(640), a.height.unwrap_or(480))
     } else if let Some(path) = &a.cameras {
         camera::read_cameras_json(path)?
     } else {

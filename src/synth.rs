@@ -6,8 +6,8 @@
 //! without objects (`depth/`, `depth_background/`, EXR, camera z), and `unseen_mask/` marking
 //! background that no training view sees.
 
-use crate::demo::Rng;
 use crate::io::{write_atomic, write_exr, write_png, write_png_rgb};
+use crate::rng::Rng;
 use crate::scene::Camera;
 use crate::train::dataset::is_test_view;
 use anyhow::{bail, Context, Result};

@@ -36,7 +36,7 @@ fn frechet_distance_matches_the_closed_form() {
     let got = frechet_distance(&a, &b).unwrap();
     assert!((got - expect).abs() < 1e-9 * expect.max(1.0), "FID {got} vs closed form {expect}");
     // an orthonormal embedding of R^3 into R^10 (Gram-Schmidt of fixed vectors): 6 samples < 10 dims
-    let mut rng = cogeo::demo::Rng::new(4);
+    let mut rng = cogeo::rng::Rng::new(4);
     let mut basis: Vec<Vec<f64>> = Vec::new();
     while basis.len() < 3 {
         let mut v: Vec<f64> = (0..10).map(|_| rng.normal()).collect();

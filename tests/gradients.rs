@@ -7,11 +7,11 @@
 
 mod common;
 
-use cogeo::demo::Rng;
 use cogeo::gpu::{Buffer, Recorder};
 use cogeo::render::backward::{Backward, PixelGradients, SceneGradients};
 use cogeo::render::reference::render_reference;
 use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
+use cogeo::rng::Rng;
 use cogeo::scene::{Camera, GaussianScene};
 use common::{gpu, logit};
 

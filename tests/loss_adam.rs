@@ -2,8 +2,8 @@
 
 mod common;
 
-use cogeo::demo::Rng;
 use cogeo::gpu::{Buffer, Recorder};
+use cogeo::rng::Rng;
 use cogeo::train::adam::{Adam, Moments, BETA1, BETA2, EPS};
 use cogeo::train::loss::{reference, LossInputs, PhotometricLoss};
 use common::gpu;

@@ -3,10 +3,10 @@
 
 mod common;
 
-use cogeo::demo::Rng;
 use cogeo::gpu::Recorder;
 use cogeo::render::backward::SceneGradients;
 use cogeo::render::SceneBuffers;
+use cogeo::rng::Rng;
 use cogeo::scene::camera::rotation_from_qvec;
 use cogeo::scene::GaussianScene;
 use cogeo::train::mcmc::McmcPasses;

@@ -3,10 +3,10 @@
 
 mod common;
 
-use cogeo::demo::Rng;
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
 use cogeo::render::scan::{PrefixScan, SCAN_BLOCK};
 use cogeo::render::sort::{RadixSort, BLOCK_KEYS};
+use cogeo::rng::Rng;
 use common::gpu;
 
 /// Sorts (key, index) pairs on the GPU and checks against Rust's stable sort.

@@ -2,7 +2,7 @@
 //! N x N pixels it covers in a render N times finer with one ray each (the same camera with its
 //! intrinsics scaled), and one ray per pixel must stay the plain pixel-center render.
 
-use cogeo::demo::Rng;
+use cogeo::rng::Rng;
 use cogeo::synth::{make_cameras, make_objects, render_view, Rig, SynthConfig};
 
 fn config() -> SynthConfig {

@@ -4,8 +4,8 @@
 
 mod common;
 
-use cogeo::demo::Rng;
 use cogeo::gpu::{Buffer, Recorder};
+use cogeo::rng::Rng;
 use cogeo::tag::distill::{nearest_neighbors, Classifier, CrossEntropyArgs, KnnKlArgs, TagLosses};
 use common::{finite_differences, gpu};
 

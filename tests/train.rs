@@ -111,8 +111,8 @@ fn train_synth_scene_survives_a_kill_and_reaches_psnr() {
 /// Frozen groups do not move; with a trust radius, each geometry tensor moves at most that far per step.
 #[test]
 fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
-    use cogeo::demo::Rng;
     use cogeo::gpu::{DeviceChoice, Gpu};
+    use cogeo::rng::Rng;
     use cogeo::scene::{Camera, GaussianScene};
     use cogeo::train::dataset::{Dataset, View};
     use cogeo::train::trainer::{Frozen, TrainConfig, Trainer};

@@ -11,8 +11,8 @@
 //! `image` [1, 3, H, W] (the completed RGB in [0, 1]), `mask` [1, 1, H, W] (1 = hole); output
 //! [1, 1, H, W]: the predicted noise epsilon. H and W are the view's.
 
-use crate::demo::Rng;
 use crate::onnx::{Model, Tensor};
+use crate::rng::Rng;
 use anyhow::{bail, Result};
 use std::path::Path;
 

@@ -1,5 +1,6 @@
 //! Gaussian scenes (CPU side, structure of arrays), INRIA PLY I/O and cameras.
 
+pub mod builtin;
 pub mod camera;
 pub mod colmap;
 pub mod ply;
@@ -49,6 +50,11 @@ pub struct GaussianScene {
     /// SH coefficients, [gaussian][basis k][channel c], K = (sh_degree + 1)^2 bases.
     pub sh: Vec<f32>,
     pub extras: Vec<ExtraProperty>,
+}
+
+/// The stored (pre-sigmoid) opacity of an opacity `p` in (0, 1).
+pub fn logit(p: f64) -> f32 {
+    (p / (1.0 - p)).ln() as f32
 }
 
 /// SH coefficients per channel for a degree.

@@ -12,10 +12,10 @@
 //! objects. Each Gaussian's label is then argmax_q p_q(f_i).
 
 use super::labels::{LabelMaps, IGNORE};
-use crate::demo::Rng;
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
+use crate::rng::Rng;
 use crate::scene::{Camera, GaussianScene};
 use crate::shaders;
 use crate::train::adam::{Adam, Moments};

@@ -9,12 +9,11 @@
 //!   gets opacity 1 - (1 - o)^(1/N) and a scale chosen so that the N stacked copies keep the same
 //!   opacity at the center and the same integral along a line through it (`relocated`).
 
-use super::trainer::logit;
-use crate::demo::Rng;
 use crate::gpu::{dispatch_1d, ComputePipeline, Gpu, Recorder};
 use crate::render::backward::SceneGradients;
 use crate::render::SceneBuffers;
-use crate::scene::GaussianScene;
+use crate::rng::Rng;
+use crate::scene::{logit, GaussianScene};
 use crate::shaders;
 use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};

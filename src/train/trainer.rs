@@ -10,14 +10,14 @@ use super::adam::{Adam, Moments};
 use super::dataset::{Dataset, View};
 use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
 use super::mcmc::{self, McmcPasses, RelocationStats};
-use crate::demo::Rng;
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
 use crate::render::reference::SH_C0;
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
+use crate::rng::Rng;
 use crate::scene::camera::rotation_from_qvec;
 use crate::scene::colmap::Point3D;
-use crate::scene::{sh_coeffs, GaussianScene};
+use crate::scene::{logit, sh_coeffs, GaussianScene};
 use anyhow::{bail, Result};
 
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -95,10 +95,6 @@ pub const LR_SH_REST: f32 = 2.5e-3 / 20.0;
 pub const LR_OPACITY: f32 = 0.025;
 pub const LR_SCALE: f32 = 5e-3;
 pub const LR_ROTATION: f32 = 1e-3;
-
-pub(crate) fn logit(p: f64) -> f32 {
-    (p / (1.0 - p)).ln() as f32
-}
 
 /// INRIA initialization from sparse points: color from the point, isotropic scale from the mean
 /// squared distance to the 3 nearest neighbours, identity rotation, opacity 0.1.

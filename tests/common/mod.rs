@@ -4,8 +4,8 @@
 
 pub mod onnx;
 
-use cogeo::demo::Rng;
 use cogeo::gpu::{DeviceChoice, Gpu};
+use cogeo::rng::Rng;
 use cogeo::scene::{Camera, GaussianScene};
 use std::path::PathBuf;
 
