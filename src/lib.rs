@@ -2,18 +2,15 @@
 //!
 //! Modules map onto the pipeline: `gpu` (device, memory, pipelines), `render` (forward passes and
 //! their CPU reference), `scene` (Gaussians, PLY, cameras), `train` (optimization), `tag` (object labels per Gaussian),
-//! then removal: `remove` (selection, hole masks, the pipeline), `complete` (inpainting and depth),
-//! `fuse` (new Gaussians, pruning), `refine` (trust-region refinement), `eval` (metrics), `onnx`
+//! then `removal` (selection, hole masks, completion, fusion and pruning, refinement, and the
+//! pipeline that strings them together), `eval` (metrics), `onnx`
 //! (user-supplied models); `rng` (seeded random numbers).
 
-pub mod complete;
 pub mod eval;
-pub mod fuse;
 pub mod gpu;
 pub mod io;
 pub mod onnx;
-pub mod refine;
-pub mod remove;
+pub mod removal;
 pub mod render;
 pub mod rng;
 pub mod scene;

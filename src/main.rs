@@ -330,7 +330,7 @@ struct RemovalFlags {
     /// Contract of --depth-model: depth-anything-v2 (ImageNet-normalized RGB, sides multiples of 14,
     /// affine-invariant disparity out) or depth-anything3 (504x504 in, depth out).
     #[arg(long, value_enum, default_value = "depth-anything-v2")]
-    depth_contract: cogeo::complete::depth::DepthContract,
+    depth_contract: cogeo::removal::complete::depth::DepthContract,
     /// ONNX depth-inpainting denoiser run as a masked DDIM loop (inputs sample, timestep, alpha_bar,
     /// image, mask; output the predicted noise). Default: built-in edge-aware refinement.
     #[arg(long)]
@@ -352,7 +352,7 @@ struct RemovalFlags {
     /// How new Gaussians are made: depth (back-projected completed depth, fused and pruned) or
     /// nearest-copy (baseline: each removed Gaussian replaced by a copy of its nearest remaining one).
     #[arg(long, value_enum, default_value = "depth")]
-    fill: cogeo::remove::Fill,
+    fill: cogeo::removal::Fill,
     /// Ablation: only delete the Gaussians (no inpainting, no new Gaussians, no refinement).
     #[arg(long)]
     removal_only: bool,
@@ -1242,7 +1242,7 @@ fn write_views(dir: &Path, cameras: &[Camera], images: &[Vec<f32>]) -> Result<()
 }
 
 fn cmd_remove(a: RemoveArgs) -> Result<()> {
-    use cogeo::complete::{depth::DepthPrior, diffusion::OnnxDenoiser, inpaint::Inpainter, Completer};
+    use cogeo::removal::complete::{depth::DepthPrior, diffusion::OnnxDenoiser, inpaint::Inpainter, Completer};
     let f = &a.removal;
     let labels = chosen_labels(f, &a.scene)?;
     let scene = load_scene(&a.scene)?;
@@ -1267,31 +1267,31 @@ fn cmd_remove(a: RemoveArgs) -> Result<()> {
         depth_guidance: !f.no_depth_guidance,
         seed: f.seed,
     };
-    let opts = cogeo::remove::RemoveOptions {
+    let opts = cogeo::removal::RemoveOptions {
         labels: labels.clone(),
         hole_threshold: f.hole_threshold,
         dilate: f.dilate,
         keep_alpha: f.keep_alpha,
-        stages: cogeo::remove::Stages {
+        stages: cogeo::removal::Stages {
             complete: !f.removal_only,
             transfer: !f.no_transfer,
             prune: !f.no_prune,
             refine: !f.no_refine,
         },
         fill: f.fill,
-        fuse: cogeo::fuse::FuseConfig { stride: f.stride.max(1), ..Default::default() },
+        fuse: cogeo::removal::fuse::FuseConfig { stride: f.stride.max(1), ..Default::default() },
         prune: match (f.prune_near, f.prune_radius) {
             (None, None) => None,
             (near, radius) => {
                 let near = near.or(radius.map(|r| r * 2.0 / 3.0)).unwrap();
-                Some(cogeo::fuse::PruneConfig {
+                Some(cogeo::removal::fuse::PruneConfig {
                     near,
                     radius: radius.unwrap_or(near * 1.5),
                     min_neighbours: f.prune_min_neighbours,
                 })
             }
         },
-        refine: cogeo::refine::RefineConfig {
+        refine: cogeo::removal::refine::RefineConfig {
             iters: f.refine_iters,
             trust_radius: f.trust_radius,
             background: f.background,
@@ -1316,7 +1316,7 @@ fn cmd_remove(a: RemoveArgs) -> Result<()> {
             .progress_chars("=> "),
     );
     let start = std::time::Instant::now();
-    let removal = cogeo::remove::remove(
+    let removal = cogeo::removal::remove(
         &gpu,
         &scene,
         &scene_labels,
@@ -1365,8 +1365,8 @@ fn cmd_remove(a: RemoveArgs) -> Result<()> {
         }
     }
     let test_cams: Vec<Camera> = data.test.iter().map(|v| v.camera.clone()).collect();
-    let test_before = cogeo::remove::render_rgb(&gpu, &scene, &test_cams, f.background)?;
-    let test_after = cogeo::remove::render_rgb(&gpu, &removal.scene, &test_cams, f.background)?;
+    let test_before = cogeo::removal::render_rgb(&gpu, &scene, &test_cams, f.background)?;
+    let test_after = cogeo::removal::render_rgb(&gpu, &removal.scene, &test_cams, f.background)?;
     write_views(&out.join("test_before"), &test_cams, &test_before)?;
     write_views(&out.join("test_after"), &test_cams, &test_after)?;
     // synth ground truth is stored at the dataset's resolution; a downscaled run is not scored

@@ -4,10 +4,10 @@
 
 mod common;
 
-use cogeo::complete::depth::{self, DepthContract, DepthPrior, DepthView, PriorSpace};
-use cogeo::complete::diffusion::{masked_ddim, OnnxDenoiser};
-use cogeo::complete::inpaint::Inpainter;
-use cogeo::fuse::{prune_mask, PruneConfig};
+use cogeo::removal::complete::depth::{self, DepthContract, DepthPrior, DepthView, PriorSpace};
+use cogeo::removal::complete::diffusion::{masked_ddim, OnnxDenoiser};
+use cogeo::removal::complete::inpaint::Inpainter;
+use cogeo::removal::fuse::{prune_mask, PruneConfig};
 use common::onnx;
 
 fn tmp(name: &str) -> std::path::PathBuf {
@@ -78,7 +78,7 @@ fn builtin_prior_keeps_the_crease_where_a_floor_meets_a_wall() {
     let err = (0..w * h).filter(|&i| hole[i]).map(|i| (prior[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
     assert!(err < 1e-4, "planar prior relative error {err}");
     // the harmonic interpolant alone rounds the crease off
-    let harmonic = cogeo::complete::image::harmonic_fill(
+    let harmonic = cogeo::removal::complete::image::harmonic_fill(
         &render_depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect::<Vec<_>>(),
         &known,
         w,
@@ -141,10 +141,10 @@ fn hole_mask_thresholds_the_removed_weight_share() {
     let (w, h) = (8, 1);
     let weight = [0.0, 0.01, 0.2, 0.5, 0.9, 0.2, 0.0, 0.0];
     let alpha = [1.0, 1.0, 1.0, 1.0, 1.0, 0.3, 0.0, 0.0];
-    let m = cogeo::remove::hole_mask(&weight, &alpha, w, h, 0.3, 0.0);
+    let m = cogeo::removal::hole_mask(&weight, &alpha, w, h, 0.3, 0.0);
     // 0.2 of a full pixel is below 0.3; 0.2 of a 0.3-alpha pixel is above
     assert_eq!(m, [false, false, false, true, true, true, false, false]);
-    let grown = cogeo::remove::hole_mask(&weight, &alpha, w, h, 0.3, 1.0);
+    let grown = cogeo::removal::hole_mask(&weight, &alpha, w, h, 0.3, 1.0);
     assert_eq!(grown, [false, false, true, true, true, true, true, false]);
 }
 
@@ -239,7 +239,7 @@ fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
         rest.sh.extend((0..12).map(|k| (10 * i + k) as f32));
     }
     let removed = [[0.9f32, 0.2, 0.0], [0.1, 1.6, 0.3], [-0.2, 0.1, 0.0]];
-    let copies = cogeo::fuse::nearest_copies(&rest, &removed);
+    let copies = cogeo::removal::fuse::nearest_copies(&rest, &removed);
     assert_eq!(copies.means, removed.to_vec());
     for (k, nearest) in [1usize, 2, 0].into_iter().enumerate() {
         assert_eq!(copies.log_scales[k], rest.log_scales[nearest]);
@@ -255,7 +255,7 @@ fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
 /// its hole, or at a depth 10 % off, nothing is transferred.
 #[test]
 fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
-    use cogeo::complete::transfer::{transfer, SourceView};
+    use cogeo::removal::complete::transfer::{transfer, SourceView};
     use cogeo::scene::Camera;
     let (w, h) = (40usize, 30usize);
     let cam = |name: &str, x: f64| {

@@ -1,4 +1,4 @@
-//! Multi-object removal, stages 1 and 2 and the whole pipeline (`cogeo remove`):
+//! Multi-object removal, the paper's stages after tagging, and the whole pipeline (`cogeo remove`):
 //!
 //! 1. Selection: the Gaussians whose `label` (from `cogeo tag`) is one of the chosen labels go.
 //! 2. Hole masks: per edited view, M = pixels where the removed Gaussians carried more than
@@ -15,14 +15,18 @@
 //!
 //! Each stage can be switched off for ablations (`Stages`).
 
-use crate::complete::transfer::{transfer, SourceView, Transfer};
-use crate::complete::{image::dilate, Completer, ViewInputs};
-use crate::fuse::{self, FuseConfig, FuseView, PruneConfig};
+pub mod complete;
+pub mod fuse;
+pub mod refine;
+
 use crate::gpu::Gpu;
-use crate::refine::{self, RefineConfig, RefineReport};
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
+use complete::transfer::{transfer, SourceView, Transfer};
+use complete::{image::dilate, Completer, ViewInputs};
+use fuse::{FuseConfig, FuseView, PruneConfig};
+use refine::{RefineConfig, RefineReport};
 use std::time::Instant;
 
 #[derive(Clone, Debug, serde::Serialize)]
