@@ -12,8 +12,7 @@
 //! Pruning (kiddo): a background Gaussian is pruned when it lies within `near` of a patch Gaussian
 //! AND has fewer than `min_neighbours` other background Gaussians within `radius`.
 
-use crate::render::reference::SH_C0;
-use crate::scene::{Camera, GaussianScene};
+use crate::scene::{Camera, GaussianScene, SH_C0};
 use kiddo::{KdTree, SquaredEuclidean};
 use std::collections::HashMap;
 

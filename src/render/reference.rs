@@ -8,7 +8,7 @@
 //! assert that they are rare.
 
 use crate::scene::camera::rotation_from_qvec;
-use crate::scene::{Camera, GaussianScene};
+use crate::scene::{Camera, GaussianScene, SH_C0, SH_C1, SH_C2, SH_C3};
 
 /// A Gaussian projected in f64.
 #[derive(Clone, Debug)]
@@ -34,20 +34,6 @@ pub struct ReferenceImage {
     pub features: Vec<f64>,
     pub ambiguous: Vec<bool>,
 }
-
-pub const SH_C0: f64 = 0.28209479177387814;
-pub const SH_C1: f64 = 0.4886025119029199;
-pub const SH_C2: [f64; 5] =
-    [1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792, 0.5462742152960396];
-pub const SH_C3: [f64; 7] = [
-    -0.5900435899266435,
-    2.890611442640554,
-    -0.4570457994644658,
-    0.3731763325901154,
-    -0.4570457994644658,
-    1.445305721320277,
-    -0.5900435899266435,
-];
 
 /// Real SH basis values (INRIA order) for a unit direction, degree <= 3.
 pub fn sh_basis(d: [f64; 3], degree: u32) -> [f64; 16] {

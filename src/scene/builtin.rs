@@ -5,7 +5,7 @@ use crate::rng::Rng;
 use crate::scene::{logit, Camera, GaussianScene};
 
 fn rgb_to_dc(c: f64) -> f32 {
-    ((c - 0.5) / crate::render::reference::SH_C0) as f32
+    ((c - 0.5) / crate::scene::SH_C0) as f32
 }
 
 /// Appends a flat-ish Gaussian at `p` with color `rgb`, scale `s` (sigma), and thin axis `thin`.

@@ -57,6 +57,22 @@ pub fn logit(p: f64) -> f32 {
     (p / (1.0 - p)).ln() as f32
 }
 
+// Real spherical-harmonics basis constants (INRIA order): SH_C0 turns a DC coefficient into color
+// (rgb = 0.5 + SH_C0 * dc), the others scale the bands of degree 1..3.
+pub const SH_C0: f64 = 0.28209479177387814;
+pub const SH_C1: f64 = 0.4886025119029199;
+pub const SH_C2: [f64; 5] =
+    [1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792, 0.5462742152960396];
+pub const SH_C3: [f64; 7] = [
+    -0.5900435899266435,
+    2.890611442640554,
+    -0.4570457994644658,
+    0.3731763325901154,
+    -0.4570457994644658,
+    1.445305721320277,
+    -0.5900435899266435,
+];
+
 /// SH coefficients per channel for a degree.
 pub fn sh_coeffs(degree: u32) -> usize {
     ((degree + 1) * (degree + 1)) as usize

@@ -12,12 +12,11 @@ use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
 use super::mcmc::{self, McmcPasses, RelocationStats};
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
-use crate::render::reference::SH_C0;
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
 use crate::rng::Rng;
 use crate::scene::camera::rotation_from_qvec;
 use crate::scene::colmap::Point3D;
-use crate::scene::{logit, sh_coeffs, GaussianScene};
+use crate::scene::{logit, sh_coeffs, GaussianScene, SH_C0};
 use anyhow::{bail, Result};
 
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
