@@ -3,11 +3,12 @@
 //! Modules map onto the pipeline: `gpu` (device, memory, pipelines), `render` (forward passes and
 //! their CPU reference), `scene` (Gaussians, PLY, cameras), `train` (optimization), `tag` (object labels per Gaussian),
 //! then `removal` (selection, hole masks, completion, fusion and pruning, refinement, and the
-//! pipeline that strings them together), `eval` (metrics), `onnx`
+//! pipeline that strings them together), `eval` (metrics), `image_ops` (resizing, masks), `onnx`
 //! (user-supplied models); `rng` (seeded random numbers).
 
 pub mod eval;
 pub mod gpu;
+pub mod image_ops;
 pub mod io;
 pub mod onnx;
 pub mod removal;

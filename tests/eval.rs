@@ -246,7 +246,7 @@ fn eval_cli_on_a_synth_dataset() {
             (0..3).flat_map(|c| im.pixels().map(move |p| p[c] as f32 / 255.0)).collect()
         };
         let chan_means = |x: &[f32]| -> Vec<f64> {
-            let s = cogeo::removal::complete::image::resize_bilinear(x, 40, 30, 3, 299, 299);
+            let s = cogeo::image_ops::resize_bilinear(x, 40, 30, 3, 299, 299);
             (0..3)
                 .map(|c| s[c * 299 * 299..(c + 1) * 299 * 299].iter().map(|&v| v as f64).sum::<f64>() / (299.0 * 299.0))
                 .collect()

@@ -78,7 +78,7 @@ fn builtin_prior_keeps_the_crease_where_a_floor_meets_a_wall() {
     let err = (0..w * h).filter(|&i| hole[i]).map(|i| (prior[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
     assert!(err < 1e-4, "planar prior relative error {err}");
     // the harmonic interpolant alone rounds the crease off
-    let harmonic = cogeo::removal::complete::image::harmonic_fill(
+    let harmonic = cogeo::removal::complete::harmonic::harmonic_fill(
         &render_depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect::<Vec<_>>(),
         &known,
         w,

@@ -169,8 +169,8 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
             let d = l.distance(&render, &gt, wu, hu)?;
             view["lpips_full"] = json!(d);
             lp_full.push(d);
-            if let Some(r) = crate::removal::complete::image::bounding_box(&mask, wu) {
-                use crate::removal::complete::image::crop;
+            if let Some(r) = crate::image_ops::bounding_box(&mask, wu) {
+                use crate::image_ops::crop;
                 let b = l.distance(&crop(&render, wu, hu, 3, r), &crop(&gt, wu, hu, 3, r), r.width(), r.height())?;
                 view["lpips_bbox"] = json!(b);
                 lp_bbox.push(b);

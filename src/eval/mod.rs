@@ -155,7 +155,7 @@ pub fn mask_scores(a: &[f32], b: &[f32], mask: &[bool], w: usize, h: usize) -> O
 /// Scores on the crop to the mask's bounding box (the SPIn-NeRF protocol): every pixel of the crop
 /// counts, and SSIM windows see only the crop.
 pub fn bbox_scores(a: &[f32], b: &[f32], mask: &[bool], w: usize, h: usize) -> Option<Scores> {
-    use crate::removal::complete::image::{bounding_box, crop};
+    use crate::image_ops::{bounding_box, crop};
     let r = bounding_box(mask, w)?;
     let channels = a.len() / (w * h);
     let (ca, cb) = (crop(a, w, h, channels, r), crop(b, w, h, channels, r));

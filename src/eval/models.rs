@@ -9,8 +9,8 @@
 //!   set's features and reports their Fréchet distance (`frechet_distance`). With a handful of
 //!   views FID is noisy: the report gives the sample count next to it.
 
+use crate::image_ops::resize_bilinear;
 use crate::onnx::{Model, Tensor};
-use crate::removal::complete::image::resize_bilinear;
 use anyhow::{bail, Result};
 use std::path::Path;
 

@@ -20,11 +20,12 @@ pub mod fuse;
 pub mod refine;
 
 use crate::gpu::Gpu;
+use crate::image_ops::dilate;
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
 use complete::transfer::{transfer, SourceView, Transfer};
-use complete::{image::dilate, Completer, ViewInputs};
+use complete::{Completer, ViewInputs};
 use fuse::{FuseConfig, FuseView, PruneConfig};
 use refine::{RefineConfig, RefineReport};
 use std::time::Instant;

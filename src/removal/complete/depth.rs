@@ -20,8 +20,9 @@
 //!
 //! Either model may name its single input and output as it likes.
 
-use super::image::{feather, harmonic_fill, resize_bilinear};
+use super::harmonic::harmonic_fill;
 use super::surfaces::surfaces_around;
+use crate::image_ops::{feather, resize_bilinear};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
 use std::path::Path;

@@ -1,7 +1,7 @@
 //! RGB completion of one view: fill the pixels of a hole mask.
 //!
 //! - `Inpainter::BuiltIn` needs no weights: the harmonic (membrane) interpolant of the pixels around
-//!   the hole, solved coarse to fine (`image::harmonic_fill`). Deterministic; smooth rather than
+//!   the hole, solved coarse to fine (`harmonic::harmonic_fill`). Deterministic; smooth rather than
 //!   textured, which is what a masked PSNR rewards when nothing is known about the hole.
 //! - `Inpainter::Onnx` runs a user-supplied model with the LaMa contract: inputs `image`
 //!   [1, 3, 512, 512] RGB in [0, 1] and `mask` [1, 1, 512, 512] (1 = hole), one output [1, 3, 512, 512]
@@ -9,7 +9,8 @@
 //!   context, is cropped, resized to 512 x 512, inpainted, resized back, and only the hole pixels are
 //!   pasted into the view.
 
-use super::image::{bounding_box, crop, harmonic_fill, resize_bilinear, Rect};
+use super::harmonic::harmonic_fill;
+use crate::image_ops::{bounding_box, crop, resize_bilinear, Rect};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
 use std::path::Path;

@@ -7,14 +7,14 @@
 //! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
 //!   edge-aware model-free refinement.
 //! - `diffusion`: the masked DDIM loop of a depth-inpainting denoiser (ONNX).
-//! - `image`: resizing, masks, harmonic fill.
+//! - `harmonic`: the harmonic fill (smooth interpolation into a hole) of colors and depth.
 //! - `surfaces`: the background planes around a hole, for the depth prior and for keeping each
 //!   surface's colors on it.
 //! - `transfer`: colors of the completed surface from the other views that saw it.
 
 pub mod depth;
 pub mod diffusion;
-pub mod image;
+pub mod harmonic;
 pub mod inpaint;
 pub mod surfaces;
 pub mod transfer;

@@ -8,7 +8,8 @@
 //! - depth-guided color: each pixel to synthesize is filled from the known pixels of its own
 //!   surface only (`fill_by_surface`), so floor texture does not bleed into the wall.
 
-use super::image::{bounding_box, distance_to, harmonic_fill, Rect};
+use super::harmonic::harmonic_fill;
+use crate::image_ops::{bounding_box, distance_to, Rect};
 
 /// A plane as its inverse depth over the image: disparity = a x + b y + c at pixel center (x, y).
 #[derive(Clone, Copy, Debug, PartialEq)]
