@@ -16,6 +16,70 @@ use crate::scene::{Camera, GaussianScene, SH_C0};
 use kiddo::{KdTree, SquaredEuclidean};
 use std::collections::HashMap;
 
+/// How the new Gaussians behind the removed objects are made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Fill {
+    /// CoGeo-GS: back-project the completed depth of every view, fuse, prune (this module).
+    Depth,
+    /// Baseline (Gaussian-Grouping-style): each removed Gaussian is replaced by a copy of its
+    /// nearest remaining Gaussian, at its own position.
+    NearestCopy,
+}
+
+/// Stage 4's result.
+pub struct Patched {
+    /// The background with the new Gaussians appended (and pruned Gaussians gone).
+    pub scene: GaussianScene,
+    /// Fusion statistics and the patch size, for the report.
+    pub report: serde_json::Value,
+    pub pruned: usize,
+    /// The pruning criteria used, when pruning ran.
+    pub prune: Option<PruneConfig>,
+}
+
+/// Stage 4: adds new Gaussians behind the removed objects to `background`. `Fill::Depth`
+/// back-projects and fuses the completed `views`, then (with `prune`) removes sparse background
+/// outliers near the patch, by `prune_config` or, when None, criteria from the patch spacing s
+/// (near 2 s, radius 3 s, 4 neighbours). `Fill::NearestCopy` copies the nearest remaining Gaussian
+/// to each of `removed_means`.
+pub fn patch_scene(
+    background: GaussianScene,
+    fill: Fill,
+    views: &[FuseView],
+    removed_means: &[[f32; 3]],
+    cfg: &FuseConfig,
+    prune: bool,
+    prune_config: Option<PruneConfig>,
+) -> anyhow::Result<Patched> {
+    let mut scene = background;
+    if fill == Fill::NearestCopy {
+        let patch = nearest_copies(&scene, removed_means);
+        scene.append(&patch)?;
+        let report = serde_json::json!({ "fill": "nearest-copy", "patch_gaussians": patch.len() });
+        return Ok(Patched { scene, report, pruned: 0, prune: None });
+    }
+    let (points, stats) = fuse_points(views, cfg);
+    let patch = patch_gaussians(&points, scene.sh_degree, cfg.opacity);
+    let (mut pruned, mut prune_used) = (0, None);
+    if prune && !patch.is_empty() {
+        let cfg = prune_config.unwrap_or_else(|| {
+            let mut fp: Vec<f64> = points.iter().map(|p| p.footprint).collect();
+            fp.sort_by(|a, b| a.total_cmp(b));
+            let s = fp[fp.len() / 2];
+            PruneConfig { near: 2.0 * s, radius: 3.0 * s, min_neighbours: 4 }
+        });
+        let mask = prune_mask(&scene.means, &patch.means, &cfg);
+        pruned = mask.iter().filter(|&&p| p).count();
+        let keep: Vec<bool> = mask.iter().map(|&p| !p).collect();
+        scene = scene.subset(&keep);
+        prune_used = Some(cfg);
+    }
+    scene.append(&patch)?;
+    let report = serde_json::json!({ "stats": stats, "patch_gaussians": patch.len() });
+    Ok(Patched { scene, report, pruned, prune: prune_used })
+}
+
 /// One edited view's completion.
 pub struct FuseView<'a> {
     pub camera: &'a Camera,

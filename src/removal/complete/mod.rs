@@ -19,10 +19,12 @@ pub mod inpaint;
 pub mod surfaces;
 pub mod transfer;
 
+use crate::scene::Camera;
 use anyhow::Result;
 use depth::{DepthPrior, DepthView, PriorSpace};
 use diffusion::OnnxDenoiser;
 use inpaint::Inpainter;
+use transfer::{transfer, SourceView, Transfer};
 
 /// The models and settings of completion.
 pub struct Completer {
@@ -70,6 +72,56 @@ pub struct Completed {
 }
 
 impl Completer {
+    /// Stage 3: completes every edited view (view i gets index i, which seeds its diffusion noise).
+    pub fn complete_views(
+        &mut self,
+        views: &[ViewInputs],
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Vec<Completed>> {
+        let mut out = Vec::with_capacity(views.len());
+        for (i, v) in views.iter().enumerate() {
+            out.push(self.complete(v, i)?);
+            progress(i + 1, views.len());
+        }
+        Ok(out)
+    }
+
+    /// Stage 3b, depth-guided color transfer over the whole `hole` of every view (covered pixels
+    /// render background that few views constrained): pixels whose completed surface point another
+    /// view saw take that view's captured color (`sources`, one per view), and what no view saw
+    /// of `fill` is inpainted again, now from the transferred colors too. Returns the number of
+    /// transferred pixels per view.
+    pub fn transfer_colors(
+        &mut self,
+        cameras: &[Camera],
+        sources: &[SourceView],
+        holes: &[&[bool]],
+        fills: &[&[bool]],
+        completed: &mut [Completed],
+    ) -> Result<Vec<usize>> {
+        let found: Vec<Transfer> = (0..completed.len())
+            .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, 0.05))
+            .collect();
+        let mut counts = Vec::with_capacity(found.len());
+        for (i, t) in found.into_iter().enumerate() {
+            let (w, h) = (cameras[i].width as usize, cameras[i].height as usize);
+            let c = &mut completed[i];
+            let n = t.found.iter().filter(|&&f| f).count();
+            if n > 0 {
+                let mut image = c.rgb.clone();
+                for p in (0..w * h).filter(|&p| t.found[p]) {
+                    for ch in 0..3 {
+                        image[ch * w * h + p] = t.rgb[ch * w * h + p];
+                    }
+                }
+                let rest: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !t.found[p]).collect();
+                c.rgb = self.inpaint_again(&image, &rest, &c.surfaces, w, h)?;
+            }
+            counts.push(n);
+        }
+        Ok(counts)
+    }
+
     pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {
         let (w, h) = (v.width, v.height);
         let rgb = self.inpainter.inpaint(v.rgb, v.fill, w, h)?;

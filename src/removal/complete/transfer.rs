@@ -35,7 +35,7 @@ fn bilinear(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64) -> f32 {
     (1.0 - fy) * ((1.0 - fx) * p(x0, y0) + fx * p(x1, y0)) + fy * ((1.0 - fx) * p(x0, y1) + fx * p(x1, y1))
 }
 
-/// Transfers colors into the `fill` pixels (remove.rs passes the whole hole) of view `target` (camera, completed depth) from the
+/// Transfers colors into the `fill` pixels (the pipeline passes the whole hole) of view `target` (camera, completed depth) from the
 /// `sources` (all edited views; the target itself is skipped by index). A source qualifies when
 /// the point projects inside it, off its hole, where its original render is opaque (alpha > 0.5)
 /// and at the point's depth within `tolerance` (relative). The nearest qualifying camera wins.

@@ -1,0 +1,136 @@
+//! Stages 1 and 2 of removal: which Gaussians go, and where each edited view needs new content.
+//!
+//! 1. Selection: the Gaussians whose `label` (from `cogeo tag`) is one of the chosen labels go.
+//! 2. Hole masks: per edited view, M = pixels where the removed Gaussians carried more than
+//!    `hole_threshold` of the pixel's blending weight in the original render (their weight is
+//!    splatted as a one-channel feature), dilated by `dilate` pixels. The pixels to synthesize are
+//!    the part of M that the remaining Gaussians do not already cover (alpha after removal below
+//!    `keep_alpha`): background seen from other views keeps its render.
+
+use crate::gpu::Gpu;
+use crate::image_ops::dilate;
+use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
+use crate::scene::{Camera, GaussianScene};
+use anyhow::{bail, Result};
+
+/// Which Gaussians carry a chosen label.
+pub fn select(labels: &[u8], chosen: &[u8]) -> Vec<bool> {
+    labels.iter().map(|l| chosen.contains(l)).collect()
+}
+
+/// Stage 1: the Gaussians to remove and the scene without them.
+pub struct Selection {
+    /// Per input Gaussian: true when it is removed.
+    pub removed: Vec<bool>,
+    pub count: usize,
+    /// The remaining Gaussians, in their input order.
+    pub background: GaussianScene,
+}
+
+/// Stage 1: selects the Gaussians of the `chosen` labels; fails when none or all of them go.
+pub fn select_gaussians(scene: &GaussianScene, labels: &[u8], chosen: &[u8]) -> Result<Selection> {
+    let removed = select(labels, chosen);
+    let count = removed.iter().filter(|&&r| r).count();
+    if count == 0 {
+        bail!("no Gaussian carries label(s) {:?}", chosen);
+    }
+    let keep: Vec<bool> = removed.iter().map(|&r| !r).collect();
+    let background = scene.subset(&keep);
+    if background.is_empty() {
+        bail!("removing label(s) {:?} leaves no Gaussian", chosen);
+    }
+    Ok(Selection { removed, count, background })
+}
+
+/// Renders RGB, alpha, expected depth and (with `removed`) the removed Gaussians' weight.
+pub struct ViewRenderer {
+    raster: Rasterizer,
+    buffers: SceneBuffers,
+    features: bool,
+}
+
+/// One render of a view (planar RGB, alpha, expected depth; the removed weight when asked for).
+pub struct Rendered {
+    pub rgb: Vec<f32>,
+    pub alpha: Vec<f32>,
+    pub depth: Vec<f32>,
+    pub weight: Vec<f32>,
+}
+
+impl ViewRenderer {
+    pub fn new(gpu: &Gpu, scene: &GaussianScene, removed: Option<&[bool]>) -> Result<ViewRenderer> {
+        let feature: Option<Vec<f32>> = removed.map(|r| r.iter().map(|&x| x as u8 as f32).collect());
+        let buffers = SceneBuffers::upload(gpu, scene, feature.as_deref().map(|f| (f, 1)))?;
+        Ok(ViewRenderer { raster: Rasterizer::new(gpu)?, buffers, features: removed.is_some() })
+    }
+
+    pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
+        let settings = RenderSettings { background, features: self.features, ..Default::default() };
+        let o = self.raster.render(&self.buffers, camera, &settings)?;
+        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight: o.features })
+    }
+}
+
+/// The dilated hole of one view from the removed weight and alpha of the original render.
+pub fn hole_mask(weight: &[f32], alpha: &[f32], w: usize, h: usize, threshold: f32, radius: f32) -> Vec<bool> {
+    let raw: Vec<bool> = weight.iter().zip(alpha).map(|(&wt, &a)| wt > 0.02 && wt > threshold * a.max(1e-6)).collect();
+    dilate(&raw, w, h, radius)
+}
+
+/// How stage 2 draws the holes.
+pub struct HoleConfig {
+    /// Share of a pixel's weight the removed Gaussians must carry for it to be in the hole.
+    pub threshold: f32,
+    /// Hole dilation in pixels.
+    pub dilate: f32,
+    /// Hole pixels the remaining Gaussians cover with at least this alpha keep their render.
+    pub keep_alpha: f32,
+    pub background: [f32; 3],
+}
+
+/// Stage 2 for one edited view.
+pub struct MaskedView {
+    /// Original render: RGB, and the alpha and expected depth that color transfer checks.
+    pub before: Rendered,
+    /// Render right after deleting the Gaussians (the input of completion).
+    pub after_removal: Rendered,
+    /// Dilated hole M.
+    pub hole: Vec<bool>,
+    /// The part of M to synthesize.
+    pub fill: Vec<bool>,
+    /// The objects' own footprint with a 1-pixel margin for their anti-aliased edges: where color
+    /// transfer must not read this view (the dilated hole would hide background other views saw).
+    pub footprint: Vec<bool>,
+}
+
+/// Stage 2: renders every view before and after deletion and draws its hole.
+pub fn hole_masks(
+    gpu: &Gpu,
+    scene: &GaussianScene,
+    selection: &Selection,
+    cameras: &[Camera],
+    cfg: &HoleConfig,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<MaskedView>> {
+    let mut original = ViewRenderer::new(gpu, scene, Some(&selection.removed))?;
+    let mut remaining = ViewRenderer::new(gpu, &selection.background, None)?;
+    let mut views = Vec::new();
+    for (i, cam) in cameras.iter().enumerate() {
+        let (w, h) = (cam.width as usize, cam.height as usize);
+        let mut before = original.render(cam, cfg.background)?;
+        let hole = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, cfg.dilate);
+        let after_removal = remaining.render(cam, cfg.background)?;
+        let fill: Vec<bool> = (0..w * h).map(|p| hole[p] && after_removal.alpha[p] < cfg.keep_alpha).collect();
+        let footprint = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, 1.0);
+        before.weight = Vec::new();
+        views.push(MaskedView { before, after_removal, hole, fill, footprint });
+        progress(i + 1, cameras.len());
+    }
+    Ok(views)
+}
+
+/// Renders `scene` from `cameras` (planar RGB each).
+pub fn render_rgb(gpu: &Gpu, scene: &GaussianScene, cameras: &[Camera], background: [f32; 3]) -> Result<Vec<Vec<f32>>> {
+    let mut r = ViewRenderer::new(gpu, scene, None)?;
+    cameras.iter().map(|c| Ok(r.render(c, background)?.rgb)).collect()
+}
