@@ -20,7 +20,7 @@ use std::collections::HashMap;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Fill {
-    /// CoGeo-GS: back-project the completed depth of every view, fuse, prune (this module).
+    /// CoGeo-GS: back-project the completed depth of every view, fuse, prune (fuse.rs).
     Depth,
     /// Baseline (Gaussian-Grouping-style): each removed Gaussian is replaced by a copy of its
     /// nearest remaining Gaussian, at its own position.
@@ -272,21 +272,6 @@ pub fn prune_mask(background: &[[f32; 3]], patch: &[[f32; 3]], cfg: &PruneConfig
         .collect()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn back_projection_inverts_projection() {
-        let cam = Camera::look_at("c", 64, 48, 50.0, [1.0, -3.0, 1.5], [0.0, 0.0, 0.3], [0.0, 0.0, 1.0]);
-        let p = back_project(&cam, 10, 30, 2.5);
-        let pc = cam.to_camera(p);
-        assert!((pc[2] - 2.5).abs() < 1e-9);
-        assert!((cam.fx * pc[0] / pc[2] + cam.cx - 10.5).abs() < 1e-9);
-        assert!((cam.fy * pc[1] / pc[2] + cam.cy - 30.5).abs() < 1e-9);
-    }
-}
-
 /// The Gaussian-Grouping-style fill used as a baseline: one new Gaussian at each removed
 /// Gaussian's position, copying every other attribute (scale, rotation, opacity, color) from its
 /// nearest remaining Gaussian. No depth, no inpainted colors: the refinement that follows has to
@@ -311,4 +296,19 @@ pub fn nearest_copies(remaining: &GaussianScene, removed_means: &[[f32; 3]]) -> 
         out.sh.extend_from_slice(&remaining.sh[j * k..(j + 1) * k]);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn back_projection_inverts_projection() {
+        let cam = Camera::look_at("c", 64, 48, 50.0, [1.0, -3.0, 1.5], [0.0, 0.0, 0.3], [0.0, 0.0, 1.0]);
+        let p = back_project(&cam, 10, 30, 2.5);
+        let pc = cam.to_camera(p);
+        assert!((pc[2] - 2.5).abs() < 1e-9);
+        assert!((cam.fx * pc[0] / pc[2] + cam.cx - 10.5).abs() < 1e-9);
+        assert!((cam.fy * pc[1] / pc[2] + cam.cy - 30.5).abs() < 1e-9);
+    }
 }
