@@ -145,6 +145,24 @@ pub fn feather(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<f32> {
         .collect()
 }
 
+/// Concatenates planar RGB images of one height side by side, 2-pixel white gaps, into RGB8.
+pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>) {
+    let gap = 2;
+    let total_w = images.len() * w + (images.len() - 1) * gap;
+    let mut out = vec![255u8; total_w * h * 3];
+    for (k, img) in images.iter().enumerate() {
+        let x0 = k * (w + gap);
+        for y in 0..h {
+            for x in 0..w {
+                for c in 0..3 {
+                    out[(y * total_w + x0 + x) * 3 + c] = crate::io::to_u8(img[c * w * h + y * w + x]);
+                }
+            }
+        }
+    }
+    (total_w as u32, h as u32, out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

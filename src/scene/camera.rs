@@ -182,3 +182,25 @@ pub fn write_cameras_json(cameras: &[Camera], path: &Path) -> Result<()> {
         w.write_all(text.as_bytes()).map_err(Into::into)
     })
 }
+/// Resizes every camera to `width` x `height` (intrinsics scaled); with only one of them given,
+/// the other follows each camera's aspect ratio; with neither, the cameras are returned as they are.
+pub fn resize_cameras(cameras: Vec<Camera>, width: Option<u32>, height: Option<u32>) -> Result<Vec<Camera>> {
+    if width == Some(0) || height == Some(0) {
+        bail!("--width and --height must be positive");
+    }
+    Ok(cameras
+        .into_iter()
+        .map(|c| match (width, height) {
+            (None, None) => c,
+            (Some(w), Some(h)) => c.resized(w, h),
+            (Some(w), None) => {
+                let h = ((c.height as f64 * w as f64 / c.width as f64).round() as u32).max(1);
+                c.resized(w, h)
+            }
+            (None, Some(h)) => {
+                let w = ((c.width as f64 * h as f64 / c.height as f64).round() as u32).max(1);
+                c.resized(w, h)
+            }
+        })
+        .collect())
+}

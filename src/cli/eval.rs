@@ -1,0 +1,89 @@
+//! `cogeo eval`: renders scored against ground truth inside masks.
+
+use anyhow::{bail, Result};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct EvalArgs {
+    /// Rendered images (PNG/JPEG); every image here is scored.
+    #[arg(long)]
+    pub renders: PathBuf,
+    /// Ground-truth images with the same names (for synth data: `gt_background/`).
+    #[arg(long)]
+    pub gt: PathBuf,
+    /// 8-bit masks with the same names; a pixel counts when its value is nonzero (or in --labels).
+    #[arg(long)]
+    pub masks: PathBuf,
+    /// Mask values that count, e.g. `1,2` (default: every nonzero value).
+    #[arg(long, value_delimiter = ',')]
+    pub labels: Vec<u8>,
+    /// Region of the headline numbers: mask (mean over mask pixels), bbox (the mask's bounding-box
+    /// crop, SPIn-NeRF) or full (whole image). All three are always in the JSON.
+    #[arg(long, value_enum, default_value = "mask")]
+    pub protocol: cogeo::eval::folder::Protocol,
+    /// The `cogeo synth` dataset the renders come from: adds never-seen / seen-elsewhere subsets
+    /// (`unseen_mask/`), the leftover-object score (`images/`), and enables --depth and --scene.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Rendered depth (camera z) as `<name>.exr`: AbsRel and RMSE inside the mask against
+    /// `depth_background/` (needs --data).
+    #[arg(long)]
+    pub depth: Option<PathBuf>,
+    /// The edited scene (PLY): floater score = opacity-weighted count of Gaussians farther than
+    /// --tau from the true surface in every view whose mask they project into (needs --data).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Floater threshold, relative to the true depth.
+    #[arg(long, default_value_t = 0.05)]
+    pub tau: f64,
+    /// Leftover score margin: a mask pixel counts as leftover when the render is closer to the
+    /// image with the objects than to the ground truth by more than this mean RGB difference.
+    #[arg(long, default_value_t = 0.05)]
+    pub leftover_margin: f32,
+    /// LPIPS network (ONNX; inputs in0, in1 [1,3,H,W] in [-1,1]; one output value).
+    #[arg(long)]
+    pub lpips_model: Option<PathBuf>,
+    /// FID feature network (ONNX; input images [N,3,299,299] in [0,1]; output [N,D]).
+    #[arg(long)]
+    pub fid_model: Option<PathBuf>,
+    /// Output JSON (written atomically).
+    #[arg(long, default_value = "metrics.json")]
+    pub out: PathBuf,
+}
+
+pub fn run(a: EvalArgs) -> Result<()> {
+    use cogeo::eval::folder::{evaluate, EvalConfig};
+    if (a.depth.is_some() || a.scene.is_some()) && a.data.is_none() {
+        bail!("--depth and --scene need --data (the synth dataset with the true background depth)");
+    }
+    let cfg = EvalConfig {
+        renders: a.renders,
+        gt: a.gt,
+        masks: a.masks,
+        labels: a.labels,
+        protocol: a.protocol,
+        data: a.data,
+        depth: a.depth,
+        scene: a.scene,
+        tau: a.tau,
+        leftover_margin: a.leftover_margin,
+        lpips: a.lpips_model,
+        fid: a.fid_model,
+    };
+    let metrics = evaluate(&cfg)?;
+    cogeo::io::write_atomic(&a.out, |w| {
+        serde_json::to_writer_pretty(&mut *w, &metrics)?;
+        Ok(())
+    })?;
+    let h = &metrics["headline"];
+    eprintln!(
+        "{} view(s), {:?} protocol: PSNR {:.2} dB, SSIM {:.4}; wrote {}",
+        metrics["views"].as_array().map_or(0, |v| v.len()),
+        cfg.protocol,
+        h["psnr"].as_f64().unwrap_or(f64::NAN),
+        h["ssim"].as_f64().unwrap_or(f64::NAN),
+        a.out.display()
+    );
+    Ok(())
+}
