@@ -1,10 +1,12 @@
 //! cogeo: a Vulkan-native 3D Gaussian Splatting engine (render, train, tag, remove objects).
 //!
 //! Modules map onto the pipeline: `gpu` (device, memory, pipelines), `render` (forward passes and
-//! their CPU reference), `scene` (Gaussians, PLY, cameras), `train` (optimization), `tag` (object labels per Gaussian),
-//! then `removal` (selection, hole masks, completion, fusion and pruning, refinement, and the
-//! pipeline that strings them together), `eval` (metrics), `image_ops` (resizing, masks), `onnx`
-//! (user-supplied models); `rng` (seeded random numbers).
+//! their CPU reference), `scene` (Gaussians, PLY, cameras, the built-in scene), `train`
+//! (optimization), `tag` (object labels per Gaussian, the paper's first stage), then `removal` (the
+//! later stages in order: selection and hole masks, completion, fusion and pruning, refinement, and
+//! the pipeline that strings them together), `eval` (metrics), `synth` (datasets with exact ground
+//! truth); helpers: `image_ops` (resizing, masks), `io` (image files), `onnx` (user-supplied
+//! models), `rng` (seeded random numbers). The command line lives in the binary (src/cli).
 
 pub mod eval;
 pub mod gpu;
