@@ -3,9 +3,11 @@
 // sums of what lies behind it, so
 //   dC/dalpha_i = T_i c_i - (sum_{j>i} w_j c_j + T_final bg) / (1 - alpha_i)
 // and likewise for alpha (1 - T_final), accumulated depth and the weight sum behind expected depth.
-// Per-pair gradients are summed over the subgroup (any size) and added with one atomic per subgroup.
+// Per-pair gradients are summed over the subgroup (any size) and added with one atomic per subgroup;
+// subgroups where the Gaussian contributed to no pixel skip both.
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_vote : require
 #ifndef NO_FLOAT_ATOMICS
 #extension GL_EXT_shader_atomic_float : require
 #endif
@@ -84,6 +86,7 @@ void main() {
             vec3 g_conic = vec3(0.0);
             float g_opacity = 0.0, g_depth = 0.0;
             vec3 g_color = vec3(0.0);
+            bool contributed = false;
             if (idx < last) {
                 vec4 co = s_conic_opacity[j];
                 vec2 d = s_xy[j] - pixel;
@@ -94,6 +97,7 @@ void main() {
                     float raw = co.w * gauss;
                     float alpha = min(ALPHA_MAX, raw);
                     if (alpha >= ALPHA_MIN) {
+                        contributed = true;
                         float one_minus = 1.0 - alpha;
                         T = T / one_minus;
                         float w = alpha * T;
@@ -117,7 +121,10 @@ void main() {
                     }
                 }
             }
-            // j is uniform, so every lane of the subgroup reaches these reductions together
+            // j is uniform, so every lane of the subgroup reaches these reductions together. Most
+            // (Gaussian, subgroup) pairs of a tile have no contribution at all: one vote skips their ten
+            // reductions and the atomics (the sums would be zero, so nothing else changes).
+            if (!subgroupAny(contributed)) continue;
             g_xy = subgroupAdd(g_xy);
             g_conic = subgroupAdd(g_conic);
             g_opacity = subgroupAdd(g_opacity);
