@@ -119,3 +119,65 @@ pub fn read_json(p: &std::path::Path) -> serde_json::Value {
 pub fn s(v: &[&str]) -> Vec<String> {
     v.iter().map(|x| x.to_string()).collect()
 }
+
+/// The device's copy bandwidth (gpu::bandwidth), measured on 256 MiB and printed: the roof of the
+/// benches' roofline columns.
+pub fn copy_bandwidth(gpu: &Gpu) -> cogeo::gpu::bandwidth::CopyBandwidth {
+    let bw = cogeo::gpu::bandwidth::measure(gpu, 256 << 20, 3).expect("cannot measure the copy bandwidth");
+    println!(
+        "copy bandwidth (read + write): {:.1} GB/s compute copy (the roof below), {:.1} GB/s transfer copy",
+        bw.shader_gbps, bw.transfer_gbps,
+    );
+    bw
+}
+
+/// Per-pass GPU times over repeated runs, with the bytes each pass states it moves.
+#[derive(Default)]
+pub struct PassStats {
+    order: Vec<String>,
+    ms: std::collections::BTreeMap<String, Vec<f64>>,
+    bytes: std::collections::BTreeMap<String, u64>,
+}
+
+impl PassStats {
+    pub fn add(&mut self, timings: &[cogeo::gpu::PassTiming]) {
+        for p in timings {
+            if !self.order.contains(&p.pass) {
+                self.order.push(p.pass.clone());
+            }
+            self.ms.entry(p.pass.clone()).or_default().push(p.ms);
+            self.bytes.insert(p.pass.clone(), p.bytes);
+        }
+    }
+
+    /// Median time of each pass in first-seen order: (pass, ms, bytes).
+    pub fn medians(&self) -> Vec<(String, f64, u64)> {
+        self.order.iter().map(|p| (p.clone(), median(self.ms[p].clone()), self.bytes[p])).collect()
+    }
+
+    /// Prints one line per pass: time, and where the pass states its bytes, the MB it moves, its
+    /// GB/s and the share of the roof (the copy bandwidth) that is.
+    pub fn print(&self, indent: &str, roof_gbps: f64) {
+        for (p, ms, bytes) in self.medians() {
+            let roofline = if bytes > 0 {
+                let gbps = bytes as f64 / (ms * 1e6);
+                format!("  {:>9.1} MB {:>7.2} GB/s {:>5.1} % of copy", bytes as f64 / 1e6, gbps, 100.0 * gbps / roof_gbps)
+            } else {
+                String::new()
+            };
+            println!("{indent}{p:<20} {ms:>10.2} ms{roofline}");
+        }
+    }
+
+    /// The passes as JSON rows: pass, ms, and where stated bytes, GB/s and share of the roof.
+    pub fn json(&self, roof_gbps: f64) -> Vec<serde_json::Value> {
+        self.medians()
+            .into_iter()
+            .map(|(p, ms, bytes)| {
+                let gbps = (bytes > 0).then(|| bytes as f64 / (ms * 1e6));
+                serde_json::json!({"pass": p, "ms": ms, "bytes": (bytes > 0).then_some(bytes), "gbps": gbps,
+                                   "share_of_copy": gbps.map(|g| g / roof_gbps)})
+            })
+            .collect()
+    }
+}

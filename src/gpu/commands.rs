@@ -5,11 +5,21 @@ use super::{Buffer, ComputePipeline, Gpu};
 use anyhow::{Context, Result};
 use ash::vk;
 
-/// GPU time of one recorded pass (summed when a pass name repeats).
+/// GPU time of one recorded pass (summed when a pass name repeats), and the bytes it reads and
+/// writes in device memory where its owner knows them (0: not stated), so a bench can put the
+/// pass's throughput next to the device's copy bandwidth.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct PassTiming {
     pub pass: String,
     pub ms: f64,
+    pub bytes: u64,
+}
+
+impl PassTiming {
+    /// Bytes moved per second, in GB/s (None when the bytes are not stated or no time was measured).
+    pub fn gbps(&self) -> Option<f64> {
+        (self.bytes > 0 && self.ms > 0.0).then(|| self.bytes as f64 / (self.ms * 1e6))
+    }
 }
 
 const MAX_TIMESTAMPS: u32 = 256;
@@ -19,8 +29,8 @@ pub struct Recorder {
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
     query_pool: Option<vk::QueryPool>,
-    /// Pass name for each timestamp after the first.
-    labels: Vec<String>,
+    /// Pass name and bytes moved for each timestamp after the first.
+    labels: Vec<(String, u64)>,
     pending_barrier: bool,
 }
 
@@ -135,13 +145,18 @@ impl Recorder {
 
     /// Ends the pass named `label`: its time is everything recorded since the previous mark.
     pub fn mark(&mut self, label: &str) {
+        self.mark_moved(label, 0);
+    }
+
+    /// As `mark`, for a pass that reads and writes `bytes` of device memory in all.
+    pub fn mark_moved(&mut self, label: &str, bytes: u64) {
         let Some(pool) = self.query_pool else { return };
         let index = self.labels.len() as u32 + 1;
         if index >= MAX_TIMESTAMPS {
             return;
         }
         unsafe { self.device().cmd_write_timestamp(self.cmd, vk::PipelineStageFlags::BOTTOM_OF_PIPE, pool, index) };
-        self.labels.push(label.to_string());
+        self.labels.push((label.to_string(), bytes));
     }
 
     /// Submits, waits, and returns the time of each marked pass (same names summed, in first-seen order).
@@ -173,11 +188,14 @@ impl Recorder {
                 )?
             };
             let period = s.info.timestamp_period_ns as f64;
-            for (i, label) in self.labels.iter().enumerate() {
+            for (i, (label, bytes)) in self.labels.iter().enumerate() {
                 let ms = stamps[i + 1].saturating_sub(stamps[i]) as f64 * period * 1e-6;
                 match timings.iter_mut().find(|t| &t.pass == label) {
-                    Some(t) => t.ms += ms,
-                    None => timings.push(PassTiming { pass: label.clone(), ms }),
+                    Some(t) => {
+                        t.ms += ms;
+                        t.bytes += bytes;
+                    }
+                    None => timings.push(PassTiming { pass: label.clone(), ms, bytes: *bytes }),
                 }
             }
         }

@@ -2,6 +2,7 @@
 //! per-pass timestamps. Every buffer is reached by shaders through its device address, which is what
 //! lets a scene exceed a driver's per-binding storage-buffer limit (128 MiB on lavapipe).
 
+pub mod bandwidth;
 mod buffer;
 mod commands;
 mod pipeline;

@@ -176,8 +176,17 @@ impl PhotometricLoss {
             },
             groups,
         );
-        rec.mark("loss");
+        rec.mark_moved("loss", Self::bytes_moved(hw, inputs.mask.is_some()));
         Ok(())
+    }
+
+    /// Device-memory bytes the passes of `record` read and write for `hw` pixels: products
+    /// (2 planes in, 5 out), the blur of 5 (each direction reads and writes them), the SSIM terms
+    /// (5 in, 3 + the SSIM map out), the blur of 3, the gradient (render, target, 3 terms in; dL/dx
+    /// and the L1 map out); per channel, 4 bytes each, plus the mask read twice.
+    pub fn bytes_moved(hw: u32, masked: bool) -> u64 {
+        let planes = (2 + 5) + 4 * 5 + (5 + 4) + 4 * 3 + (5 + 2);
+        4 * hw as u64 * (planes * CHANNELS as u64 + if masked { 2 } else { 0 })
     }
 
     /// Separable blur of `planes` planes; the result ends in `src` again (src -> tmp -> src).

@@ -291,6 +291,14 @@ impl Trainer {
             let w_s = if f.log_scales { 0.0 } else { mcmc::SCALE_REG };
             self.mcmc.record_regularize(&mut rec, s, g, (w_o, w_s));
         }
+        // bytes of the Adam passes; a clipped step also writes and reads back its update
+        let adam_elements = |frozen: bool, m: &super::adam::Moments| if frozen { 0 } else { m.len as u64 };
+        let geometry_bytes = super::adam::BYTES_PER_ELEMENT + if self.trust_radius.is_some() { 8 } else { 0 };
+        let adam_bytes = geometry_bytes
+            * (adam_elements(f.means, &m.means)
+                + adam_elements(f.log_scales, &m.log_scales)
+                + adam_elements(f.quats, &m.quats))
+            + super::adam::BYTES_PER_ELEMENT * (adam_elements(f.opacity, &m.opacity_logits) + adam_elements(f.sh, &m.sh));
         let geometry = [
             (f.means, &s.means, &g.means, &m.means, self.position_lr()),
             (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE),
@@ -311,7 +319,7 @@ impl Trainer {
         if !f.sh {
             self.adam.record_split(&mut rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
         }
-        rec.mark("adam");
+        rec.mark_moved("adam", adam_bytes);
         if mcmc && !f.means {
             let seed = (self.cfg.seed as u32).wrapping_mul(0x9e37_79b9) ^ self.step;
             self.mcmc.record_noise(&mut rec, s, mcmc::NOISE_LR * self.position_lr(), seed);
