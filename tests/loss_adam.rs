@@ -89,11 +89,11 @@ fn loss_value_and_gradient_match_cpu() {
     check_loss(30, 17, true, 2);
 }
 
-#[test]
-fn adam_matches_cpu_for_several_steps() {
+/// Five Adam steps on `n` elements with rates (lr, period, head, tail factor) against an f64 twin;
+/// returns the max error.
+fn check_adam(n: usize, period: u32, head: u32, tail: f32) -> f64 {
     let g = gpu();
     let mut rng = Rng::new(5);
-    let n = 1000;
     let mut p: Vec<f32> = image(&mut rng, n);
     let p_buf = Buffer::from_slice(&g, "p", &p).unwrap();
     let moments = Moments::new(&g, "p", n as u32).unwrap();
@@ -105,7 +105,7 @@ fn adam_matches_cpu_for_several_steps() {
         let g_buf = Buffer::from_slice(&g, "g", &grad).unwrap();
         let lr = 0.01 * step as f32;
         let mut rec = Recorder::new(&g).unwrap();
-        adam.record(&mut rec, &p_buf, &g_buf, &moments, lr, step);
+        adam.record_split(&mut rec, &p_buf, &g_buf, &moments, (lr, period, head, lr * tail), step);
         rec.submit_and_wait().unwrap();
         let (b1, b2) = (BETA1 as f64, BETA2 as f64);
         for i in 0..n {
@@ -114,17 +114,33 @@ fn adam_matches_cpu_for_several_steps() {
             v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
             let mh = m[i] / (1.0 - b1.powi(step as i32));
             let vh = v[i] / (1.0 - b2.powi(step as i32));
-            pd[i] -= lr as f64 * mh / (vh.sqrt() + EPS as f64);
+            let rate = if (i as u32 % period) < head { lr } else { lr * tail } as f64;
+            pd[i] -= rate * mh / (vh.sqrt() + EPS as f64);
         }
     }
     p = p_buf.download(&g, n).unwrap();
     let err = p.iter().zip(&pd).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
-    println!("adam max error after 5 steps: {err:.3e}");
-    assert!(err < 1e-5, "adam error {err}");
-    // Adam's steps move parameters by about lr each: the comparison above is not between two no-ops
+    // Adam's steps move parameters by about lr each: the comparison is not between two no-ops
     let moved: f64 =
         p.iter().zip(image(&mut Rng::new(5), n)).map(|(a, b)| (a - b).abs() as f64).sum::<f64>() / n as f64;
-    assert!(moved > 0.01, "mean movement {moved}");
+    assert!(moved > 0.01 * tail.min(1.0) as f64, "mean movement {moved}");
+    err
+}
+
+#[test]
+fn adam_matches_cpu_for_several_steps() {
+    let err = check_adam(1000, 1, 1, 1.0);
+    println!("adam max error after 5 steps: {err:.3e}");
+    assert!(err < 1e-5, "adam error {err}");
+}
+
+#[test]
+fn adam_split_rates_follow_the_period() {
+    // SH-3 layout (48 floats per Gaussian, the first 3 at the DC rate) over several workgroup
+    // blocks and a partial one; the higher bands at 1/20 of the rate, as in training
+    let err = check_adam(5000, 48, 3, 0.05);
+    println!("split adam max error after 5 steps: {err:.3e}");
+    assert!(err < 1e-5, "adam error {err}");
 }
 
 #[test]

@@ -15,7 +15,7 @@ void main() {
     uint i = group * 256 + gl_LocalInvocationID.x;
     float u2 = 0.0;
     if (i < s.n) {
-        float u = adam_update(grad, m, v, i, s);
+        float u = adam_update(grad, m, v, i, s, adam_rate(i, s));
         update.v[i] = u;
         u2 = u * u;
     }

@@ -119,6 +119,13 @@ impl ClipScratch {
     }
 }
 
+/// Device-memory bytes one Adam step moves per element: parameter, gradient and both moments read,
+/// parameter and moments written (4 bytes each).
+pub const BYTES_PER_ELEMENT: u64 = 7 * 4;
+
+/// Elements one workgroup of adam.comp updates (256 invocations, PER = 4 each).
+const ELEMENTS_PER_GROUP: u32 = 4 * 256;
+
 pub struct Adam {
     gpu: Gpu,
     pipeline: ComputePipeline,
@@ -163,7 +170,7 @@ impl Adam {
             v: moments.v.address(),
             step: AdamStep::new(moments.len, rates, step),
         };
-        rec.dispatch(&self.pipeline, &push, dispatch_1d(moments.len.div_ceil(256)));
+        rec.dispatch(&self.pipeline, &push, dispatch_1d(moments.len.div_ceil(ELEMENTS_PER_GROUP)));
     }
 
     /// As `record_split`, with the update of the whole tensor clipped to Euclidean norm `radius`

@@ -1,9 +1,10 @@
 //! The photometric loss on the GPU: (1 - lambda) L1 + lambda (1 - SSIM), SSIM with an 11x11 Gaussian
 //! window (sigma 1.5, zero padding) as in the INRIA reference, optional per-pixel mask, and its
-//! gradient with respect to the rendered image (blur.comp, ssim_products.comp, ssim_terms.comp,
-//! loss_grad.comp). `reference` has the f64 CPU twin the tests compare against.
+//! gradient with respect to the rendered image, in four passes over a 2D grid (ssim_stats_x.comp,
+//! ssim_terms_y.comp, blur.comp, loss_grad.comp: each blur direction fused with what comes before or
+//! after it). `reference` has the f64 CPU twin the tests compare against.
 
-use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
+use crate::gpu::{Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -13,23 +14,14 @@ const CHANNELS: u32 = 3;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct BlurPush {
-    src: u64,
-    dst: u64,
-    width: u32,
-    height: u32,
-    planes: u32,
-    vertical: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct ProductsPush {
+struct StatsPush {
     render: u64,
     target: u64,
-    products: u64,
-    hw: u32,
+    stats: u64,
+    width: u32,
+    height: u32,
     channels: u32,
+    pad: u32,
 }
 
 #[repr(C)]
@@ -39,10 +31,21 @@ struct TermsPush {
     terms: u64,
     ssim_map: u64,
     mask: u64,
-    hw: u32,
+    width: u32,
+    height: u32,
     channels: u32,
     inv_weight_sum: f32,
     has_mask: u32,
+    pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct BlurPush {
+    src: u64,
+    dst: u64,
+    width: u32,
+    height: u32,
 }
 
 #[repr(C)]
@@ -50,16 +53,21 @@ struct TermsPush {
 struct GradPush {
     render: u64,
     target: u64,
-    blurred_terms: u64,
+    terms_x: u64,
     dl_dx: u64,
     l1_map: u64,
     mask: u64,
-    hw: u32,
+    width: u32,
+    height: u32,
     channels: u32,
     inv_weight_sum: f32,
     lambda: f32,
     has_mask: u32,
-    pad: u32,
+}
+
+/// Workgroups of the loss passes (64 x 4 pixels each) over `planes` planes.
+fn grid(width: u32, height: u32, planes: u32) -> [u32; 3] {
+    [width.div_ceil(64), height.div_ceil(4), planes]
 }
 
 struct Scratch {
@@ -85,9 +93,9 @@ pub struct LossInputs<'a> {
 
 pub struct PhotometricLoss {
     gpu: Gpu,
+    stats_x: ComputePipeline,
+    terms_y: ComputePipeline,
     blur: ComputePipeline,
-    products: ComputePipeline,
-    terms: ComputePipeline,
     grad: ComputePipeline,
     scratch: Option<Scratch>,
     pub lambda: f32,
@@ -97,9 +105,9 @@ impl PhotometricLoss {
     pub fn new(gpu: &Gpu) -> Result<PhotometricLoss> {
         Ok(PhotometricLoss {
             gpu: gpu.clone(),
+            stats_x: ComputePipeline::new(gpu, "ssim_stats_x", shaders::SSIM_STATS_X)?,
+            terms_y: ComputePipeline::new(gpu, "ssim_terms_y", shaders::SSIM_TERMS_Y)?,
             blur: ComputePipeline::new(gpu, "blur", shaders::BLUR)?,
-            products: ComputePipeline::new(gpu, "ssim_products", shaders::SSIM_PRODUCTS)?,
-            terms: ComputePipeline::new(gpu, "ssim_terms", shaders::SSIM_TERMS)?,
             grad: ComputePipeline::new(gpu, "loss_grad", shaders::LOSS_GRAD)?,
             scratch: None,
             lambda: SSIM_LAMBDA,
@@ -130,78 +138,60 @@ impl PhotometricLoss {
         let s = self.scratch.as_ref().unwrap();
         let hw = width * height;
         let n = hw * CHANNELS;
-        let groups = dispatch_1d(n.div_ceil(256));
         let target = inputs.target.address() + inputs.target_offset * 4;
         let (mask, has_mask, weight_sum) = match inputs.mask {
             Some((b, offset, sum)) => (b.address() + offset * 4, 1, sum * CHANNELS as f64),
             None => (0, 0, n as f64),
         };
         let inv = (1.0 / weight_sum.max(1.0)) as f32;
-        rec.dispatch(
-            &self.products,
-            &ProductsPush { render: inputs.render.address(), target, products: s.a.address(), hw, channels: CHANNELS },
-            groups,
-        );
-        self.record_blur(rec, &s.a, &s.b, width, height, 5 * CHANNELS);
-        rec.dispatch(
-            &self.terms,
-            &TermsPush {
-                stats: s.a.address(),
-                terms: s.b.address(),
-                ssim_map: s.ssim_map.address(),
-                mask,
-                hw,
-                channels: CHANNELS,
-                inv_weight_sum: inv,
-                has_mask,
-            },
-            groups,
-        );
-        self.record_blur(rec, &s.b, &s.a, width, height, 3 * CHANNELS);
-        rec.dispatch(
-            &self.grad,
-            &GradPush {
-                render: inputs.render.address(),
-                target,
-                blurred_terms: s.b.address(),
-                dl_dx: s.dl_drgb.address(),
-                l1_map: s.l1_map.address(),
-                mask,
-                hw,
-                channels: CHANNELS,
-                inv_weight_sum: inv,
-                lambda: self.lambda,
-                has_mask,
-                pad: 0,
-            },
-            groups,
-        );
+        let (render, channels) = (inputs.render.address(), CHANNELS);
+        // 1. x, y, x^2, y^2, xy blurred along x -> a
+        let stats = StatsPush { render, target, stats: s.a.address(), width, height, channels, pad: 0 };
+        rec.dispatch(&self.stats_x, &stats, grid(width, height, CHANNELS));
+        // 2. blurred along y; SSIM and its weighted partials -> b, the SSIM map
+        let terms = TermsPush {
+            stats: s.a.address(),
+            terms: s.b.address(),
+            ssim_map: s.ssim_map.address(),
+            mask,
+            width,
+            height,
+            channels,
+            inv_weight_sum: inv,
+            has_mask,
+            pad: 0,
+        };
+        rec.dispatch(&self.terms_y, &terms, grid(width, height, CHANNELS));
+        // 3. the partials blurred along x -> a
+        let blur = BlurPush { src: s.b.address(), dst: s.a.address(), width, height };
+        rec.dispatch(&self.blur, &blur, grid(width, height, 3 * CHANNELS));
+        // 4. along y, combined with L1 into dL/dx, and the L1 map
+        let grad = GradPush {
+            render,
+            target,
+            terms_x: s.a.address(),
+            dl_dx: s.dl_drgb.address(),
+            l1_map: s.l1_map.address(),
+            mask,
+            width,
+            height,
+            channels,
+            inv_weight_sum: inv,
+            lambda: self.lambda,
+            has_mask,
+        };
+        rec.dispatch(&self.grad, &grad, grid(width, height, CHANNELS));
         rec.mark_moved("loss", Self::bytes_moved(hw, inputs.mask.is_some()));
         Ok(())
     }
 
-    /// Device-memory bytes the passes of `record` read and write for `hw` pixels: products
-    /// (2 planes in, 5 out), the blur of 5 (each direction reads and writes them), the SSIM terms
-    /// (5 in, 3 + the SSIM map out), the blur of 3, the gradient (render, target, 3 terms in; dL/dx
-    /// and the L1 map out); per channel, 4 bytes each, plus the mask read twice.
+    /// Device-memory bytes the passes of `record` read and write for `hw` pixels, each plane counted
+    /// once however many taps read it: render and target in, 5 statistics out; 5 in, 3 partials
+    /// and the SSIM map out; 3 in, 3 out; 3 partials, render and target in, dL/dx and the L1 map out;
+    /// per channel, 4 bytes each, plus the mask read twice.
     pub fn bytes_moved(hw: u32, masked: bool) -> u64 {
-        let planes = (2 + 5) + 4 * 5 + (5 + 4) + 4 * 3 + (5 + 2);
+        let planes = (2 + 5) + (5 + 4) + (3 + 3) + (5 + 2);
         4 * hw as u64 * (planes * CHANNELS as u64 + if masked { 2 } else { 0 })
-    }
-
-    /// Separable blur of `planes` planes; the result ends in `src` again (src -> tmp -> src).
-    fn record_blur(&self, rec: &mut Recorder, src: &Buffer, tmp: &Buffer, width: u32, height: u32, planes: u32) {
-        let groups = dispatch_1d((width * height * planes).div_ceil(256));
-        rec.dispatch(
-            &self.blur,
-            &BlurPush { src: src.address(), dst: tmp.address(), width, height, planes, vertical: 0 },
-            groups,
-        );
-        rec.dispatch(
-            &self.blur,
-            &BlurPush { src: tmp.address(), dst: src.address(), width, height, planes, vertical: 1 },
-            groups,
-        );
     }
 
     /// dL/d(render), planar RGB, after `record` ran.

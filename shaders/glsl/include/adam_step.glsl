@@ -9,13 +9,17 @@ struct AdamStep {
     uint period; uint head; float lr_tail;
 };
 
-// Updates the moments of element i and returns its update u (to be subtracted).
-float adam_update(Floats grad, Floats m, Floats v, uint i, AdamStep s) {
+// The rate of element i: lr when i % period < head, else lr_tail.
+float adam_rate(uint i, AdamStep s) {
+    return (i % s.period) < s.head ? s.lr : s.lr_tail;
+}
+
+// Updates the moments of element i and returns its update u (to be subtracted) at `rate`.
+float adam_update(Floats grad, Floats m, Floats v, uint i, AdamStep s, float rate) {
     float g = grad.v[i];
     float mi = s.beta1 * m.v[i] + (1.0 - s.beta1) * g;
     float vi = s.beta2 * v.v[i] + (1.0 - s.beta2) * g * g;
     m.v[i] = mi;
     v.v[i] = vi;
-    float rate = (i % s.period) < s.head ? s.lr : s.lr_tail;
     return rate * (mi / s.bias1) / (sqrt(vi / s.bias2) + s.eps);
 }

@@ -1,0 +1,47 @@
+#version 460
+// SSIM pass 2 of 4: the statistics blurred along y (finishing the 2D window), then per pixel and
+// channel the SSIM value s and its partial derivatives with respect to the render's local mean
+// mu_x, E[x^2] and E[xy]:
+//   s = (2 mu_x mu_y + C1)(2 s_xy + C2) / ((mu_x^2 + mu_y^2 + C1)(s_x^2 + s_y^2 + C2)) = N1 N2 / (D1 D2)
+//   ds/dmu_x = 2 mu_y (N2 - N1) / D - 2 mu_x s (D2 - D1) / D,  ds/dE[x^2] = -s / D2,  ds/dE[xy] = 2 N1 / D.
+// Each is multiplied by the pixel's weight (mask / sum of mask, or 1 / pixels), so blurring them and
+// combining gives dSSIM/dx (passes 3 and 4). Writes the weighted SSIM map for the loss value.
+#include "common.glsl"
+#include "ssim_window.glsl"
+
+layout(local_size_x = 64, local_size_y = 4) in;
+layout(push_constant) uniform Push { Floats stats; Floats terms; Floats ssim_map; Floats mask; uint width; uint height; uint channels; float inv_weight_sum; uint has_mask; };
+
+const float C1 = 0.0001;  // 0.01^2
+const float C2 = 0.0009;  // 0.03^2
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (id.x >= width || id.y >= height) return;
+    uint hw = width * height, n = hw * channels;
+    uint column = id.z * hw + id.x;
+    ivec2 t = taps(int(id.y), height);
+    float mx = 0.0, my = 0.0, exx = 0.0, eyy = 0.0, exy = 0.0;
+    for (int k = t.x; k <= t.y; k++) {
+        uint i = column + uint(int(id.y) + k) * width;
+        float w = W[k + 5];
+        mx += w * stats.v[i];
+        my += w * stats.v[n + i];
+        exx += w * stats.v[2 * n + i];
+        eyy += w * stats.v[3 * n + i];
+        exy += w * stats.v[4 * n + i];
+    }
+    float sxx = exx - mx * mx;
+    float syy = eyy - my * my;
+    float sxy = exy - mx * my;
+    float n1 = 2.0 * mx * my + C1, n2 = 2.0 * sxy + C2;
+    float d1 = mx * mx + my * my + C1, d2 = sxx + syy + C2;
+    float d = d1 * d2;
+    float s = n1 * n2 / d;
+    uint pix = id.y * width + id.x, o = id.z * hw + pix;
+    float w = (has_mask != 0 ? mask.v[pix] : 1.0) * inv_weight_sum;
+    terms.v[o] = w * (2.0 * my * (n2 - n1) / d - 2.0 * mx * s * (d2 - d1) / d);
+    terms.v[n + o] = w * (-s / d2);
+    terms.v[2 * n + o] = w * (2.0 * n1 / d);
+    ssim_map.v[o] = w * s;
+}
