@@ -91,6 +91,7 @@ struct GpuGradients {
     features: Vec<f32>,
 }
 
+/// The GPU's gradients; `rows` = the blend backward's pixels per invocation (None: the device's).
 fn gpu_gradients(
     scene: &GaussianScene,
     cam: &Camera,
@@ -98,13 +99,17 @@ fn gpu_gradients(
     w: &Weights,
     feats: Option<(&[f32], usize)>,
     cas: bool,
+    rows: Option<u32>,
 ) -> GpuGradients {
     let g = gpu();
     let buffers = SceneBuffers::upload(&g, scene, feats).unwrap();
     let mut raster = Rasterizer::new(&g).unwrap();
     let settings = RenderSettings { background: bg, features: feats.is_some(), ..Default::default() };
     let frame = raster.forward(&buffers, cam, &settings).unwrap();
-    let mut backward = Backward::new(&g, cas).unwrap();
+    let mut backward = match rows {
+        Some(r) => Backward::with_rows(&g, cas, r).unwrap(),
+        None => Backward::new(&g, cas).unwrap(),
+    };
     assert_eq!(backward.uses_cas, cas || !g.info().float_atomic_add);
     let grads = SceneGradients::new(&g, &buffers).unwrap();
     let up = |v: &[f32]| Buffer::from_slice(&g, "upstream", v).unwrap();
@@ -246,7 +251,7 @@ fn run_gradient_check(degree: u32, cas: bool, seed: u64) {
     let bgd = bg.map(|v| v as f64);
     let hw = (cam.width * cam.height) as usize;
     let w = weights(hw, 0, seed + 1);
-    let g = gpu_gradients(&scene, &cam, bg, &w, None, cas);
+    let g = gpu_gradients(&scene, &cam, bg, &w, None, cas, None);
     let n = scene.len();
     let k = scene.sh_coeffs();
     let groups: Vec<(&'static str, Vec<f32>, Vec<Param>)> = vec![
@@ -289,7 +294,7 @@ fn feature_gradients_match_finite_differences() {
     let feats: Vec<f32> = (0..scene.len() * d).map(|_| rng.normal() as f32).collect();
     let w = weights(hw, d, 23);
     for cas in [false, true] {
-        let g = gpu_gradients(&scene, &cam, [0.0; 3], &w, Some((&feats, d)), cas);
+        let g = gpu_gradients(&scene, &cam, [0.0; 3], &w, Some((&feats, d)), cas, None);
         let params: Vec<Param> = (0..feats.len()).map(Param::Feature).collect();
         let problem = Problem { scene: &scene, feats: &feats, dim: d, cam: &cam, bg: [0.0; 3], w: &w };
         let (fd, skipped) = problem.fd_group(&params);
@@ -299,5 +304,32 @@ fn feature_gradients_match_finite_differences() {
             fd,
             skipped,
         });
+    }
+}
+
+#[test]
+fn blend_backward_pixel_layouts_agree() {
+    // The blend backward gives each invocation a column of 1..16 pixels (render::backward::blend_rows
+    // picks per device); every layout must give the gradients of the device's own, which the
+    // finite-difference tests above check. The camera's 44x34 leaves partial tiles and columns.
+    let scene = scene(31, 60, 1);
+    let cam = camera();
+    let hw = (cam.width * cam.height) as usize;
+    let w = weights(hw, 0, 32);
+    let bg = [0.2f32, 0.1, 0.4];
+    for cas in [false, true] {
+        let reference = gpu_gradients(&scene, &cam, bg, &w, None, cas, None);
+        let groups = |g: &GpuGradients| {
+            [g.means.clone(), g.log_scales.clone(), g.quats.clone(), g.opacity_logits.clone(), g.sh.clone()]
+        };
+        for rows in [1, 2, 4, 8, 16] {
+            let other = gpu_gradients(&scene, &cam, bg, &w, None, cas, Some(rows));
+            for (k, (a, b)) in groups(&other).iter().zip(groups(&reference)).enumerate() {
+                let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
+                let err = a.iter().zip(&b).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
+                assert!(scale > 0.0, "group {k}: no gradient at all");
+                assert!(err <= 1e-5 * scale, "rows {rows}, cas {cas}, group {k}: max difference {err} of {scale}");
+            }
+        }
     }
 }

@@ -18,6 +18,12 @@ pub struct ComputePipeline {
 impl ComputePipeline {
     /// Builds a pipeline from an embedded SPIR-V blob (see build.rs).
     pub fn new(gpu: &Gpu, name: &'static str, spirv: &[u8]) -> Result<ComputePipeline> {
+        Self::specialized(gpu, name, spirv, &[])
+    }
+
+    /// As `new`, with the shader's specialization constants 0, 1, ... set to `constants` (u32 each),
+    /// e.g. a work shape chosen per device.
+    pub fn specialized(gpu: &Gpu, name: &'static str, spirv: &[u8], constants: &[u32]) -> Result<ComputePipeline> {
         let device = &gpu.shared.device;
         let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
             .with_context(|| format!("shader {name}: invalid SPIR-V"))?;
@@ -30,10 +36,18 @@ impl ComputePipeline {
             device
                 .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges), None)?
         };
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| vk::SpecializationMapEntry::default().constant_id(i).offset(4 * i).size(4))
+            .collect();
+        let data: &[u8] = bytemuck::cast_slice(constants);
+        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(data);
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&specialization);
+        }
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
         let result = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
         unsafe { device.destroy_shader_module(module, None) };

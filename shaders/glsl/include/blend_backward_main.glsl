@@ -3,8 +3,12 @@
 // sums of what lies behind it, so
 //   dC/dalpha_i = T_i c_i - (sum_{j>i} w_j c_j + T_final bg) / (1 - alpha_i)
 // and likewise for alpha (1 - T_final), accumulated depth and the weight sum behind expected depth.
-// Per-pair gradients are summed over the subgroup (any size) and added with one atomic per subgroup;
-// subgroups where the Gaussian contributed to no pixel skip both.
+// Each invocation owns a column of ROWS pixels (the workgroup is 16 x 16/ROWS), so a subgroup covers
+// a block of its size x ROWS pixels: a Gaussian's gradients are summed over the lane's pixels in
+// registers, then over the subgroup (any size), and added with one atomic per subgroup. Subgroups
+// where the Gaussian contributed to no pixel skip both. With ROWS = 16 a Gaussian meets up to 16
+// times fewer subgroups than with a pixel per invocation, which is what its reductions and atomics
+// (on lavapipe two thirds of the pass) scale with.
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
@@ -16,10 +20,15 @@
 #include "backward_params.glsl"
 #include "blend_common.glsl"
 
-layout(local_size_x = 16, local_size_y = 16) in;
+// ROWS (1, 2, 4, 8 or 16) and the workgroup height 16 / ROWS are set per device by
+// render::backward::blend_rows.
+layout(constant_id = 0) const uint ROWS = 1;
+layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
+layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; };
 
 const uint BATCH = 256;
+const uint THREADS = 16 * GROUP_HEIGHT;
 shared vec2 s_xy[BATCH];
 shared vec4 s_conic_opacity[BATCH];
 shared vec4 s_color_depth[BATCH];
@@ -30,95 +39,105 @@ void main() {
     uint tile = tile_id();
     if (tile >= p.tiles_x * p.tiles_y) return;
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
-    uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y);
-    bool inside = pix.x < p.width && pix.y < p.height;
-    vec2 pixel = vec2(pix) + 0.5;
     uint local = gl_LocalInvocationIndex;
     uint hw = p.width * p.height;
-    uint pi = inside ? pix.y * p.width + pix.x : 0;
-
-    uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
-    float t_final = inside ? p.out_final_t.v[pi] : 1.0;
-    uint last = inside ? p.out_n_contrib.v[pi] : 0;
     vec3 bg = vec3(p.background[0], p.background[1], p.background[2]);
-    vec3 dl_dc = inside ? vec3(b.dl_drgb.v[pi], b.dl_drgb.v[hw + pi], b.dl_drgb.v[2 * hw + pi]) : vec3(0.0);
-    float dl_da = (inside && b.use_alpha != 0) ? b.dl_dalpha.v[pi] : 0.0;
-    // expected depth ED = D / W folds into gradients of D and of W = sum w_i (= 1 - T_final)
-    float dl_dd = 0.0, dl_dw = 0.0;
-    if (inside && b.use_depth != 0) {
-        float w_total = 1.0 - t_final;
-        float d_total = p.out_depth.v[pi];
-        float dl_ded = b.dl_dexpected_depth.v[pi];
-        dl_dd = b.dl_ddepth.v[pi];
-        if (w_total > 1e-10) {
-            dl_dd += dl_ded / w_total;
-            dl_dw = -dl_ded * d_total / (w_total * w_total);
+
+    // per owned pixel: position, the forward's final state, the upstream gradients, and the running
+    // transmittance and sums of what lies behind (back to front)
+    vec2 pixel[ROWS];
+    uint last[ROWS];
+    float t_final[ROWS], T[ROWS], dl_da[ROWS], dl_dd[ROWS], dl_dw[ROWS], behind_depth[ROWS], behind_weight[ROWS];
+    vec3 dl_dc[ROWS], behind_color[ROWS];
+    uint last_max = 0;
+    for (uint r = 0; r < ROWS; r++) {
+        uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y * ROWS + r);
+        bool inside = pix.x < p.width && pix.y < p.height;
+        uint pi = inside ? pix.y * p.width + pix.x : 0;
+        pixel[r] = vec2(pix) + 0.5;
+        t_final[r] = inside ? p.out_final_t.v[pi] : 1.0;
+        last[r] = inside ? p.out_n_contrib.v[pi] : 0;
+        last_max = max(last_max, last[r]);
+        dl_dc[r] = inside ? vec3(b.dl_drgb.v[pi], b.dl_drgb.v[hw + pi], b.dl_drgb.v[2 * hw + pi]) : vec3(0.0);
+        dl_da[r] = (inside && b.use_alpha != 0) ? b.dl_dalpha.v[pi] : 0.0;
+        // expected depth ED = D / W folds into gradients of D and of W = sum w_i (= 1 - T_final)
+        dl_dd[r] = 0.0;
+        dl_dw[r] = 0.0;
+        if (inside && b.use_depth != 0) {
+            float w_total = 1.0 - t_final[r];
+            float d_total = p.out_depth.v[pi];
+            float dl_ded = b.dl_dexpected_depth.v[pi];
+            dl_dd[r] = b.dl_ddepth.v[pi];
+            if (w_total > 1e-10) {
+                dl_dd[r] += dl_ded / w_total;
+                dl_dw[r] = -dl_ded * d_total / (w_total * w_total);
+            }
         }
+        T[r] = t_final[r];
+        behind_color[r] = t_final[r] * bg;
+        behind_depth[r] = 0.0;
+        behind_weight[r] = 0.0;
     }
 
+    uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
     if (local == 0) s_last = 0;
     barrier();
-    atomicMax(s_last, last);
+    atomicMax(s_last, last_max);
     barrier();
     end = min(end, max(s_last, start));
-
-    float T = t_final;
-    vec3 behind_color = t_final * bg;
-    float behind_depth = 0.0, behind_weight = 0.0;
 
     for (uint batch_end = end; batch_end > start;) {
         uint count = min(BATCH, batch_end - start);
         uint batch_start = batch_end - count;
         barrier();
-        if (local < count) {
-            uint g = p.isect_gauss.v[batch_start + local];
-            s_gauss[local] = g;
-            s_xy[local] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            s_conic_opacity[local] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
-                                          p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
-            s_color_depth[local] = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
+        for (uint k = local; k < count; k += THREADS) {
+            uint g = p.isect_gauss.v[batch_start + k];
+            s_gauss[k] = g;
+            s_xy[k] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
+            s_conic_opacity[k] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
+                                      p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
+            s_color_depth[k] = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
         }
         barrier();
         for (uint jj = count; jj > 0; jj--) {
             uint j = jj - 1;
             uint idx = batch_start + j;
+            vec4 co = s_conic_opacity[j];
             vec2 g_xy = vec2(0.0);
             vec3 g_conic = vec3(0.0);
             float g_opacity = 0.0, g_depth = 0.0;
             vec3 g_color = vec3(0.0);
             bool contributed = false;
-            if (idx < last) {
-                vec4 co = s_conic_opacity[j];
-                vec2 d = s_xy[j] - pixel;
+            for (uint r = 0; r < ROWS; r++) {
+                if (idx >= last[r]) continue;
+                vec2 d = s_xy[j] - pixel[r];
                 float power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
                 // the forward decisions, recomputed identically (see blend_weight)
-                if (power <= 0.0 && power >= POWER_SKIP) {
-                    float gauss = exp(power);
-                    float raw = co.w * gauss;
-                    float alpha = min(ALPHA_MAX, raw);
-                    if (alpha >= ALPHA_MIN) {
-                        contributed = true;
-                        float one_minus = 1.0 - alpha;
-                        T = T / one_minus;
-                        float w = alpha * T;
-                        vec3 c = s_color_depth[j].rgb;
-                        float z = s_color_depth[j].w;
-                        g_color = w * dl_dc;
-                        g_depth = w * dl_dd;
-                        float dl_dalpha = dot(dl_dc, T * c - behind_color / one_minus)
-                                        + dl_da * t_final / one_minus
-                                        + dl_dd * (T * z - behind_depth / one_minus)
-                                        + dl_dw * (T - behind_weight / one_minus);
-                        behind_color += w * c;
-                        behind_depth += w * z;
-                        behind_weight += w;
-                        if (raw < ALPHA_MAX) {  // no gradient through the 0.99 clamp
-                            g_opacity = dl_dalpha * gauss;
-                            float dl_dpower = dl_dalpha * alpha;
-                            g_conic = dl_dpower * vec3(-0.5 * d.x * d.x, -d.x * d.y, -0.5 * d.y * d.y);
-                            g_xy = -dl_dpower * vec2(co.x * d.x + co.y * d.y, co.y * d.x + co.z * d.y);
-                        }
-                    }
+                if (power > 0.0 || power < POWER_SKIP) continue;
+                float gauss = exp(power);
+                float raw = co.w * gauss;
+                float alpha = min(ALPHA_MAX, raw);
+                if (alpha < ALPHA_MIN) continue;
+                contributed = true;
+                float one_minus = 1.0 - alpha;
+                T[r] = T[r] / one_minus;
+                float w = alpha * T[r];
+                vec3 c = s_color_depth[j].rgb;
+                float z = s_color_depth[j].w;
+                g_color += w * dl_dc[r];
+                g_depth += w * dl_dd[r];
+                float dl_dalpha = dot(dl_dc[r], T[r] * c - behind_color[r] / one_minus)
+                                + dl_da[r] * t_final[r] / one_minus
+                                + dl_dd[r] * (T[r] * z - behind_depth[r] / one_minus)
+                                + dl_dw[r] * (T[r] - behind_weight[r] / one_minus);
+                behind_color[r] += w * c;
+                behind_depth[r] += w * z;
+                behind_weight[r] += w;
+                if (raw < ALPHA_MAX) {  // no gradient through the 0.99 clamp
+                    g_opacity += dl_dalpha * gauss;
+                    float dl_dpower = dl_dalpha * alpha;
+                    g_conic += dl_dpower * vec3(-0.5 * d.x * d.x, -d.x * d.y, -0.5 * d.y * d.y);
+                    g_xy += -dl_dpower * vec2(co.x * d.x + co.y * d.y, co.y * d.x + co.z * d.y);
                 }
             }
             // j is uniform, so every lane of the subgroup reaches these reductions together. Most
