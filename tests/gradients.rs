@@ -91,7 +91,7 @@ struct GpuGradients {
     features: Vec<f32>,
 }
 
-/// The GPU's gradients; `rows` = the blend backward's pixels per invocation (None: the device's).
+/// The GPU's gradients; `layout` = the blend backward's pixels per invocation (None: the device's).
 fn gpu_gradients(
     scene: &GaussianScene,
     cam: &Camera,
@@ -99,15 +99,15 @@ fn gpu_gradients(
     w: &Weights,
     feats: Option<(&[f32], usize)>,
     cas: bool,
-    rows: Option<u32>,
+    layout: Option<(u32, u32)>,
 ) -> GpuGradients {
     let g = gpu();
     let buffers = SceneBuffers::upload(&g, scene, feats).unwrap();
     let mut raster = Rasterizer::new(&g).unwrap();
     let settings = RenderSettings { background: bg, features: feats.is_some(), ..Default::default() };
     let frame = raster.forward(&buffers, cam, &settings).unwrap();
-    let mut backward = match rows {
-        Some(r) => Backward::with_rows(&g, cas, r).unwrap(),
+    let mut backward = match layout {
+        Some(l) => Backward::with_layout(&g, cas, l).unwrap(),
         None => Backward::new(&g, cas).unwrap(),
     };
     assert_eq!(backward.uses_cas, cas || !g.info().float_atomic_add);
@@ -309,9 +309,10 @@ fn feature_gradients_match_finite_differences() {
 
 #[test]
 fn blend_backward_pixel_layouts_agree() {
-    // The blend backward gives each invocation a column of 1..16 pixels (render::backward::blend_rows
-    // picks per device); every layout must give the gradients of the device's own, which the
-    // finite-difference tests above check. The camera's 44x34 leaves partial tiles and columns.
+    // The blend backward gives each invocation a block of 1..16 x 1..2 pixels
+    // (render::backward::blend_layout picks per device); every layout must give the gradients of the
+    // device's own, which the finite-difference tests above check. The camera's 44x34 leaves partial
+    // tiles and columns.
     let scene = scene(31, 60, 1);
     let cam = camera();
     let hw = (cam.width * cam.height) as usize;
@@ -322,13 +323,13 @@ fn blend_backward_pixel_layouts_agree() {
         let groups = |g: &GpuGradients| {
             [g.means.clone(), g.log_scales.clone(), g.quats.clone(), g.opacity_logits.clone(), g.sh.clone()]
         };
-        for rows in [1, 2, 4, 8, 16] {
-            let other = gpu_gradients(&scene, &cam, bg, &w, None, cas, Some(rows));
+        for layout in [(1, 1), (2, 1), (4, 1), (8, 1), (16, 1), (1, 2), (16, 2)] {
+            let other = gpu_gradients(&scene, &cam, bg, &w, None, cas, Some(layout));
             for (k, (a, b)) in groups(&other).iter().zip(groups(&reference)).enumerate() {
                 let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
                 let err = a.iter().zip(&b).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
                 assert!(scale > 0.0, "group {k}: no gradient at all");
-                assert!(err <= 1e-5 * scale, "rows {rows}, cas {cas}, group {k}: max difference {err} of {scale}");
+                assert!(err <= 1e-5 * scale, "{layout:?}, cas {cas}, group {k}: max difference {err} of {scale}");
             }
         }
     }

@@ -1,72 +1,102 @@
 #version 460
-// Tile rasterizer: one 16x16 workgroup per tile composites the tile's depth-sorted Gaussians front to
+// Tile rasterizer: one workgroup per 16x16 tile composites the tile's depth-sorted Gaussians front to
 // back. Outputs RGB (+ background), alpha, accumulated depth, expected depth, and the per-pixel state the
 // backward pass replays: final transmittance and the index past the last blended intersection.
+// Each invocation owns a column of ROWS pixels (the workgroup is 16 x 16/ROWS; render::blend_rows
+// picks ROWS per device), so a Gaussian's parameters are read from shared memory once for ROWS
+// pixels, and rows out of the Gaussian's reach (row_reach) are skipped. Every pixel makes exactly
+// the decisions of blend_weight, whatever ROWS is.
 #include "common.glsl"
 #include "render_params.glsl"
 #include "blend_common.glsl"
 
-layout(local_size_x = 16, local_size_y = 16) in;
+layout(constant_id = 0) const uint ROWS = 1;
+layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
+layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; };
 
 const uint BATCH = 256;
+const uint THREADS = 16 * GROUP_HEIGHT;
 shared vec2 s_xy[BATCH];
 shared vec4 s_conic_opacity[BATCH];
 shared vec4 s_color_depth[BATCH];
+shared float s_reach[BATCH];  // row_reach: rows farther from the center are skipped
 shared uint s_any_alive;
 
 void main() {
     uint tile = tile_id();
     if (tile >= p.tiles_x * p.tiles_y) return;  // uniform over the workgroup
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
-    uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y);
-    bool inside = pix.x < p.width && pix.y < p.height;
-    vec2 pixel = vec2(pix) + 0.5;
     uint local = gl_LocalInvocationIndex;
 
     uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
-    float T = 1.0;
-    vec3 C = vec3(0.0);
-    float D = 0.0, W = 0.0;
-    uint n_contrib = start;
-    bool finished = !inside;
+    vec2 pixel[ROWS];
+    float T[ROWS], D[ROWS], W[ROWS];
+    vec3 C[ROWS];
+    uint n_contrib[ROWS];
+    bool finished[ROWS];
+    bool lane_finished = true;  // every owned pixel finished
+    for (uint r = 0; r < ROWS; r++) {
+        uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y * ROWS + r);
+        pixel[r] = vec2(pix) + 0.5;
+        T[r] = 1.0;
+        C[r] = vec3(0.0);
+        D[r] = 0.0;
+        W[r] = 0.0;
+        n_contrib[r] = start;
+        finished[r] = !(pix.x < p.width && pix.y < p.height);
+        lane_finished = lane_finished && finished[r];
+    }
 
     for (uint batch = start; batch < end; batch += BATCH) {
         barrier();  // everyone is done with the previous batch and with s_any_alive
         if (local == 0) s_any_alive = 0;
         barrier();
-        if (!finished) atomicOr(s_any_alive, 1u);
-        uint idx = batch + local;
-        if (idx < end) {
-            uint g = p.isect_gauss.v[idx];
-            s_xy[local] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            s_conic_opacity[local] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
-                                          p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
-            s_color_depth[local] = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
+        if (!lane_finished) atomicOr(s_any_alive, 1u);
+        for (uint k = local; k < BATCH && batch + k < end; k += THREADS) {
+            uint g = p.isect_gauss.v[batch + k];
+            s_xy[k] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
+            s_conic_opacity[k] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
+                                      p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
+            s_color_depth[k] = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
+            s_reach[k] = row_reach(s_conic_opacity[k]);
         }
         barrier();
         if (s_any_alive == 0) break;
         uint count = min(BATCH, end - batch);
-        for (uint j = 0; j < count && !finished; j++) {
-            float w = blend_weight(pixel, s_xy[j], s_conic_opacity[j], T, finished);
-            if (w > 0.0) {
-                C += w * s_color_depth[j].rgb;
-                D += w * s_color_depth[j].w;
-                W += w;
-                n_contrib = batch + j + 1;
+        for (uint j = 0; j < count && !lane_finished; j++) {
+            vec2 xy = s_xy[j];
+            vec4 co = s_conic_opacity[j];
+            float reach = s_reach[j];
+            lane_finished = true;
+            for (uint r = 0; r < ROWS; r++) {
+                // the rows of a subgroup's lanes are the same, so this skip is uniform over it
+                if (!finished[r] && abs(pixel[r].y - xy.y) <= reach) {
+                    float w = blend_weight(pixel[r], xy, co, T[r], finished[r]);
+                    if (w > 0.0) {
+                        C[r] += w * s_color_depth[j].rgb;
+                        D[r] += w * s_color_depth[j].w;
+                        W[r] += w;
+                        n_contrib[r] = batch + j + 1;
+                    }
+                }
+                lane_finished = lane_finished && finished[r];
             }
         }
     }
-    if (!inside) return;
     uint hw = p.width * p.height;
-    uint pi = pix.y * p.width + pix.x;
-    vec3 rgb = C + T * vec3(p.background[0], p.background[1], p.background[2]);
-    p.out_rgb.v[pi] = rgb.r;
-    p.out_rgb.v[hw + pi] = rgb.g;
-    p.out_rgb.v[2 * hw + pi] = rgb.b;
-    p.out_alpha.v[pi] = 1.0 - T;
-    p.out_depth.v[pi] = D;
-    p.out_expected_depth.v[pi] = D / max(W, 1e-10);
-    p.out_final_t.v[pi] = T;
-    p.out_n_contrib.v[pi] = n_contrib;
+    for (uint r = 0; r < ROWS; r++) {
+        uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y * ROWS + r);
+        if (pix.x >= p.width || pix.y >= p.height) continue;
+        uint pi = pix.y * p.width + pix.x;
+        vec3 rgb = C[r] + T[r] * vec3(p.background[0], p.background[1], p.background[2]);
+        p.out_rgb.v[pi] = rgb.r;
+        p.out_rgb.v[hw + pi] = rgb.g;
+        p.out_rgb.v[2 * hw + pi] = rgb.b;
+        p.out_alpha.v[pi] = 1.0 - T[r];
+        p.out_depth.v[pi] = D[r];
+        p.out_expected_depth.v[pi] = D[r] / max(W[r], 1e-10);
+        p.out_final_t.v[pi] = T[r];
+        p.out_n_contrib.v[pi] = n_contrib[r];
+    }
 }

@@ -145,30 +145,31 @@ pub struct Backward {
     pub uses_cas: bool,
 }
 
-/// Pixels per invocation of the blend backward on this device: each invocation owns a column of
-/// them, so a Gaussian's reductions and atomics are shared by that many pixels. On lavapipe
-/// (llvmpipe, 100k Gaussians at 512x512 and a trained 12k scene at 96x72) 1 -> 2 -> 4 -> 8 -> 16
-/// rows took 931 -> 575 -> 377 -> 278 -> 268 ms and 94 -> 59 -> 41 -> 34 -> 29 ms, the forward
-/// blend 210 and 23 ms. GPUs keep a pixel per invocation (gsplat's layout) until measured there.
-pub fn blend_rows(info: &crate::gpu::DeviceInfo) -> u32 {
+/// Pixels per invocation of the blend backward on this device, as (rows, columns): each invocation
+/// owns that block of a tile, so a Gaussian's reductions and atomics are shared by its pixels. On
+/// lavapipe (llvmpipe, 100k Gaussians at 512x512 and a trained 12k scene at 96x72) 1/2/4/8/16 rows
+/// of one column took 931/575/377/278/268 ms and 94/59/41/34/29 ms (forward blend 210 and 23 ms).
+/// GPUs keep a pixel per invocation (gsplat's layout) until measured there.
+pub fn blend_layout(info: &crate::gpu::DeviceInfo) -> (u32, u32) {
     if info.device_type == "CPU" {
-        16
+        (16, 2)
     } else {
-        1
+        (1, 1)
     }
 }
 
 impl Backward {
     /// `force_cas` selects the compare-and-swap variants even where float atomics exist (tests).
     pub fn new(gpu: &Gpu, force_cas: bool) -> Result<Backward> {
-        Self::with_rows(gpu, force_cas, blend_rows(gpu.info()))
+        Self::with_layout(gpu, force_cas, blend_layout(gpu.info()))
     }
 
-    /// As `new`, with the blend backward's pixels per invocation `rows` (1, 2, 4, 8 or 16) given
-    /// instead of chosen for the device (tests run every layout on one device).
-    pub fn with_rows(gpu: &Gpu, force_cas: bool, rows: u32) -> Result<Backward> {
-        if !matches!(rows, 1 | 2 | 4 | 8 | 16) {
-            anyhow::bail!("blend backward: {rows} rows per invocation (1, 2, 4, 8 or 16)");
+    /// As `new`, with the blend backward's pixels per invocation (rows, columns: each 1, 2, 4, 8 or
+    /// 16) given instead of chosen for the device (tests run every layout on one device).
+    pub fn with_layout(gpu: &Gpu, force_cas: bool, layout: (u32, u32)) -> Result<Backward> {
+        let (rows, cols) = layout;
+        if ![rows, cols].iter().all(|v| matches!(v, 1 | 2 | 4 | 8 | 16)) {
+            anyhow::bail!("blend backward: {rows} x {cols} pixels per invocation (each 1, 2, 4, 8 or 16)");
         }
         let cas = force_cas || !gpu.info().float_atomic_add;
         let (blend, project, features) = if cas {
@@ -178,7 +179,7 @@ impl Backward {
         };
         Ok(Backward {
             gpu: gpu.clone(),
-            blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, 16 / rows])?,
+            blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, cols, 16 / cols, 16 / rows])?,
             project: ComputePipeline::new(gpu, "project_backward", project)?,
             features: ComputePipeline::new(gpu, "blend_features_backward", features)?,
             params: Buffer::new(

@@ -3,12 +3,12 @@
 // sums of what lies behind it, so
 //   dC/dalpha_i = T_i c_i - (sum_{j>i} w_j c_j + T_final bg) / (1 - alpha_i)
 // and likewise for alpha (1 - T_final), accumulated depth and the weight sum behind expected depth.
-// Each invocation owns a column of ROWS pixels (the workgroup is 16 x 16/ROWS), so a subgroup covers
-// a block of its size x ROWS pixels: a Gaussian's gradients are summed over the lane's pixels in
-// registers, then over the subgroup (any size), and added with one atomic per subgroup. Subgroups
-// where the Gaussian contributed to no pixel skip both. With ROWS = 16 a Gaussian meets up to 16
-// times fewer subgroups than with a pixel per invocation, which is what its reductions and atomics
-// (on lavapipe two thirds of the pass) scale with.
+// Each invocation owns ROWS x COLS pixels of the tile (the workgroup is 16/COLS x 16/ROWS), so a
+// subgroup covers that many times more pixels: a Gaussian's gradients are summed over the lane's
+// pixels in registers, then over the subgroup (any size), and added with one atomic per subgroup.
+// Subgroups where the Gaussian contributed to no pixel skip both. The fewer subgroups a Gaussian
+// meets, the fewer reductions and atomics it costs (with a pixel per invocation, two thirds of the
+// pass on lavapipe).
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
@@ -20,19 +20,23 @@
 #include "backward_params.glsl"
 #include "blend_common.glsl"
 
-// ROWS (1, 2, 4, 8 or 16) and the workgroup height 16 / ROWS are set per device by
-// render::backward::blend_rows.
+// ROWS x COLS pixels per invocation and the workgroup's 16/COLS x 16/ROWS are set per device by
+// render::backward::blend_layout. An invocation's pixels are its rows in COLS columns 16/COLS apart.
 layout(constant_id = 0) const uint ROWS = 1;
-layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
-layout(local_size_x = 16, local_size_y_id = 1) in;
+layout(constant_id = 1) const uint COLS = 1;
+layout(constant_id = 2) const uint GROUP_WIDTH = 16;
+layout(constant_id = 3) const uint GROUP_HEIGHT = 16;
+const uint PIXELS = ROWS * COLS;
+layout(local_size_x_id = 2, local_size_y_id = 3) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; };
 
 const uint BATCH = 256;
-const uint THREADS = 16 * GROUP_HEIGHT;
+const uint THREADS = GROUP_WIDTH * GROUP_HEIGHT;
 shared vec2 s_xy[BATCH];
 shared vec4 s_conic_opacity[BATCH];
 shared vec4 s_color_depth[BATCH];
 shared uint s_gauss[BATCH];
+shared float s_reach[BATCH];  // row_reach: rows farther from the center are skipped
 shared uint s_last;  // largest n_contrib of the tile: nothing after it contributed anywhere
 
 void main() {
@@ -45,13 +49,15 @@ void main() {
 
     // per owned pixel: position, the forward's final state, the upstream gradients, and the running
     // transmittance and sums of what lies behind (back to front)
-    vec2 pixel[ROWS];
-    uint last[ROWS];
-    float t_final[ROWS], T[ROWS], dl_da[ROWS], dl_dd[ROWS], dl_dw[ROWS], behind_depth[ROWS], behind_weight[ROWS];
-    vec3 dl_dc[ROWS], behind_color[ROWS];
+    vec2 pixel[PIXELS];
+    uint last[PIXELS];
+    float t_final[PIXELS], T[PIXELS], dl_da[PIXELS], dl_dd[PIXELS], dl_dw[PIXELS], behind_depth[PIXELS],
+        behind_weight[PIXELS];
+    vec3 dl_dc[PIXELS], behind_color[PIXELS];
     uint last_max = 0;
-    for (uint r = 0; r < ROWS; r++) {
-        uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y * ROWS + r);
+    for (uint r = 0; r < PIXELS; r++) {
+        uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x + (r / ROWS) * GROUP_WIDTH,
+                          ty * TILE + gl_LocalInvocationID.y * ROWS + r % ROWS);
         bool inside = pix.x < p.width && pix.y < p.height;
         uint pi = inside ? pix.y * p.width + pix.x : 0;
         pixel[r] = vec2(pix) + 0.5;
@@ -97,6 +103,7 @@ void main() {
             s_conic_opacity[k] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
                                       p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
             s_color_depth[k] = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
+            s_reach[k] = row_reach(s_conic_opacity[k]);
         }
         barrier();
         for (uint jj = count; jj > 0; jj--) {
@@ -108,9 +115,11 @@ void main() {
             float g_opacity = 0.0, g_depth = 0.0;
             vec3 g_color = vec3(0.0);
             bool contributed = false;
-            for (uint r = 0; r < ROWS; r++) {
-                if (idx >= last[r]) continue;
+            float reach = s_reach[j];
+            for (uint r = 0; r < PIXELS; r++) {
                 vec2 d = s_xy[j] - pixel[r];
+                // the rows of a subgroup's lanes are the same, so the reach test is uniform over it
+                if (idx >= last[r] || abs(d.y) > reach) continue;
                 float power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
                 // the forward decisions, recomputed identically (see blend_weight)
                 if (power > 0.0 || power < POWER_SKIP) continue;

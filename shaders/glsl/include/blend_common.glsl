@@ -25,5 +25,18 @@ float blend_weight(vec2 pixel, vec2 xy, vec4 conic_opacity, inout float T, inout
     return w;
 }
 
+// How far (in pixels, vertically) from its center a Gaussian can still pass blend_weight's tests: for
+// a row at offset dy, the largest power over the row is -dy^2 (ac - b^2) / (2a) (conic (a, b, c)),
+// and a pixel needs power >= max(POWER_SKIP, log(ALPHA_MIN / opacity)). Widened far beyond float
+// rounding, so a pass that skips the rows outside it makes exactly the decisions it would have made.
+float row_reach(vec4 conic_opacity) {
+    float a = conic_opacity.x, b = conic_opacity.y, c = conic_opacity.z;
+    float det = a * c - b * b;
+    if (!(a > 0.0 && det > 0.0)) return 1e30;  // degenerate: skip nothing
+    float threshold = max(POWER_SKIP, log(ALPHA_MIN / conic_opacity.w));
+    if (threshold > 0.0) return -1.0;  // opacity below ALPHA_MIN: no pixel passes
+    return sqrt(-2.0 * threshold * a / det) * 1.001 + 0.01;
+}
+
 // A workgroup is one 16x16 tile; tiles are numbered row-major.
 uint tile_id() { return linear_group_id(); }
