@@ -9,7 +9,6 @@ mod common;
 
 use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
 use cogeo::scene::Camera;
-use std::collections::BTreeMap;
 use std::time::Instant;
 
 fn main() {
@@ -19,6 +18,7 @@ fn main() {
     let frames: usize = common::arg(&args, "--frames").map(|f| f.parse().unwrap()).unwrap_or(3);
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());
+    let roof = common::copy_bandwidth(&gpu);
     let mut rows = Vec::new();
     let mut raster = Rasterizer::new(&gpu).unwrap();
     for &n in &sizes {
@@ -31,8 +31,7 @@ fn main() {
             let cam = Camera::look_at("bench", w, h, 60.0, [0.0, -0.5, -5.5], [0.0; 3], [0.0, -1.0, 0.0]);
             let settings = RenderSettings { timestamps: true, ..Default::default() };
             raster.render(&buffers, &cam, &settings).unwrap(); // warm-up: allocations, pipeline caches
-            let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-            let mut order: Vec<String> = Vec::new();
+            let mut stats = common::PassStats::default();
             let mut wall = Vec::new();
             let mut isect = 0;
             for _ in 0..frames {
@@ -40,25 +39,15 @@ fn main() {
                 let out = raster.render(&buffers, &cam, &settings).unwrap();
                 wall.push(t.elapsed().as_secs_f64() * 1e3);
                 isect = out.num_intersections;
-                for p in out.timings {
-                    if !order.contains(&p.pass) {
-                        order.push(p.pass.clone());
-                    }
-                    per_pass.entry(p.pass).or_default().push(p.ms);
-                }
+                stats.add(&out.timings);
             }
-            let passes: Vec<(String, f64)> =
-                order.iter().map(|p| (p.clone(), common::median(per_pass[p].clone()))).collect();
-            let gpu_total: f64 = passes.iter().map(|p| p.1).sum();
+            let gpu_total: f64 = stats.medians().iter().map(|p| p.1).sum();
             let wall_ms = common::median(wall);
             println!("  {w}x{h}: {isect} intersections, GPU {gpu_total:.1} ms, wall {wall_ms:.1} ms (incl. readback)");
-            for (p, ms) in &passes {
-                println!("      {p:<20} {ms:>10.2} ms");
-            }
+            stats.print("      ", roof.roof_gbps());
             rows.push(serde_json::json!({
                 "gaussians": n, "width": w, "height": h, "intersections": isect,
-                "gpu_ms": gpu_total, "wall_ms": wall_ms,
-                "passes": passes.iter().map(|(p, ms)| serde_json::json!({"pass": p, "ms": ms})).collect::<Vec<_>>(),
+                "gpu_ms": gpu_total, "wall_ms": wall_ms, "passes": stats.json(roof.roof_gbps()),
             }));
         }
     }
@@ -92,5 +81,5 @@ fn main() {
         );
     }
     let path = common::results_path(&format!("render-{}.json", common::device_slug(&gpu)));
-    common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "frames": frames, "rows": rows }));
+    common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "copy_bandwidth": roof, "frames": frames, "rows": rows }));
 }

@@ -335,11 +335,12 @@ impl Rasterizer {
         // submission 1: project, depth sort, scan of touched counts in depth order
         let mut rec = Recorder::with_timestamps(&self.gpu, settings.timestamps)?;
         rec.dispatch(&self.project, &push, dispatch_1d(n.div_ceil(256)));
-        rec.mark("project");
+        let degree = settings.sh_degree.unwrap_or(scene.sh_degree).min(scene.sh_degree);
+        rec.mark_moved("project", moved::project(n, degree));
         let in_alt =
             self.sort.record(&mut rec, &frame.depth_keys, &frame.depth_order, &isect.tile_alt, &isect.gauss_alt, n, 31);
         assert!(!in_alt, "the 31-bit depth sort has an even number of passes");
-        rec.mark("depth sort");
+        rec.mark_moved("depth sort", moved::sort(n, 31));
         rec.dispatch(&self.gather, &push, dispatch_1d((n + 1).div_ceil(256)));
         self.scan.record(&mut rec, &frame.isect_offsets, n + 1);
         rec.mark("tile count scan");
@@ -364,11 +365,11 @@ impl Rasterizer {
             let emit_push =
                 EmitPush { params: push.params, out_tile: isect.tile.address(), out_gauss: isect.gauss.address() };
             rec.dispatch(&self.emit, &emit_push, dispatch_1d(n.div_ceil(256)));
-            rec.mark("emit intersections");
+            rec.mark_moved("emit intersections", moved::emit(n, m));
             let ended_in_alt =
                 self.sort.record(&mut rec, &isect.tile, &isect.gauss, &isect.tile_alt, &isect.gauss_alt, m, tile_bits);
             debug_assert_eq!(ended_in_alt, sorted_in_alt);
-            rec.mark("tile sort");
+            rec.mark_moved("tile sort", moved::sort(m, tile_bits));
             rec.dispatch(
                 &self.ranges,
                 &ParamsPushU32 { params: push.params, value: m, pad: 0 },
@@ -377,7 +378,7 @@ impl Rasterizer {
             rec.mark("tile ranges");
         }
         rec.dispatch(&self.blend, &push, dispatch_1d(num_tiles));
-        rec.mark("blend");
+        rec.mark_moved("blend", moved::blend(m, width * height, num_tiles));
         let mut offset = 0;
         while offset < feature_dim {
             rec.dispatch(
@@ -509,3 +510,34 @@ impl Rasterizer {
         }
     }
 }
+
+/// Device-memory bytes each forward pass must read and write at least (every input element read
+/// once, every output written once), for the benches' roofline columns.
+mod moved {
+    /// Means, scales, rotations, opacity and the active SH in; 2D mean, conic and opacity, color,
+    /// depth, sort key and index, tile rectangle and touched count out.
+    pub fn project(n: u32, sh_degree: u32) -> u64 {
+        let sh = 12 * (sh_degree as u64 + 1).pow(2);
+        n as u64 * ((12 + 12 + 16 + 4 + sh) + (8 + 16 + 12 + 4 + 4 + 4 + 16 + 4))
+    }
+
+    /// A stable radix sort of `count` (key, value) pairs by `bits` bits: per 4-bit pass the pairs are
+    /// read twice (count, scatter) and written once.
+    pub fn sort(count: u32, bits: u32) -> u64 {
+        count as u64 * 24 * super::sort::passes_for_bits(bits) as u64
+    }
+
+    /// Per Gaussian its index, touched count, offset, 2D mean, conic and tile rectangle in; per
+    /// intersection its tile and Gaussian out.
+    pub fn emit(n: u32, intersections: u32) -> u64 {
+        n as u64 * (4 + 4 + 4 + 8 + 16 + 16) + intersections as u64 * 8
+    }
+
+    /// Per intersection its Gaussian index and that Gaussian's 2D mean, conic, opacity, color and
+    /// depth in; per pixel RGB, alpha, depth, expected depth, final transmittance and contributor
+    /// count out; the tile ranges in.
+    pub fn blend(intersections: u32, pixels: u32, tiles: u32) -> u64 {
+        intersections as u64 * (4 + 8 + 16 + 16) + pixels as u64 * 32 + tiles as u64 * 8
+    }
+}
+
