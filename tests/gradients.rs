@@ -8,7 +8,7 @@
 mod common;
 
 use cogeo::gpu::{Buffer, Recorder};
-use cogeo::render::backward::{Backward, PixelGradients, SceneGradients};
+use cogeo::render::backward::{Backward, BlendLayout, PixelGradients, SceneGradients};
 use cogeo::render::reference::render_reference;
 use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
 use cogeo::rng::Rng;
@@ -99,7 +99,7 @@ fn gpu_gradients(
     w: &Weights,
     feats: Option<(&[f32], usize)>,
     cas: bool,
-    layout: Option<(u32, u32)>,
+    layout: Option<BlendLayout>,
 ) -> GpuGradients {
     let g = gpu();
     let buffers = SceneBuffers::upload(&g, scene, feats).unwrap();
@@ -323,7 +323,8 @@ fn blend_backward_pixel_layouts_agree() {
         let groups = |g: &GpuGradients| {
             [g.means.clone(), g.log_scales.clone(), g.quats.clone(), g.opacity_logits.clone(), g.sh.clone()]
         };
-        for layout in [(1, 1), (2, 1), (4, 1), (8, 1), (16, 1), (1, 2), (16, 2)] {
+        for (rows, cols) in [(1, 1), (2, 1), (4, 1), (8, 1), (16, 1), (1, 2), (16, 2)] {
+            let layout = BlendLayout { rows, cols, feature_rows: 1 };
             let other = gpu_gradients(&scene, &cam, bg, &w, None, cas, Some(layout));
             for (k, (a, b)) in groups(&other).iter().zip(groups(&reference)).enumerate() {
                 let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
@@ -331,6 +332,31 @@ fn blend_backward_pixel_layouts_agree() {
                 assert!(scale > 0.0, "group {k}: no gradient at all");
                 assert!(err <= 1e-5 * scale, "{layout:?}, cas {cas}, group {k}: max difference {err} of {scale}");
             }
+        }
+    }
+}
+
+#[test]
+fn feature_backward_layouts_agree() {
+    // The feature backward's column of 1..16 pixels per invocation, against the device's own layout
+    // (checked against finite differences above), with 40 channels (two dispatches) and both
+    // accumulation variants.
+    let scene = scene(41, 40, 0);
+    let cam = camera();
+    let hw = (cam.width * cam.height) as usize;
+    let d = 40;
+    let mut rng = Rng::new(42);
+    let feats: Vec<f32> = (0..scene.len() * d).map(|_| rng.normal() as f32).collect();
+    let w = weights(hw, d, 43);
+    for cas in [false, true] {
+        let reference = gpu_gradients(&scene, &cam, [0.0; 3], &w, Some((&feats, d)), cas, None).features;
+        let scale = reference.iter().fold(0f32, |m, v| m.max(v.abs()));
+        assert!(scale > 0.0, "no feature gradient at all");
+        for feature_rows in [1, 2, 4, 8, 16] {
+            let layout = BlendLayout { rows: 1, cols: 1, feature_rows };
+            let other = gpu_gradients(&scene, &cam, [0.0; 3], &w, Some((&feats, d)), cas, Some(layout)).features;
+            let err = other.iter().zip(&reference).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
+            assert!(err <= 1e-5 * scale, "{feature_rows} rows, cas {cas}: max difference {err} of {scale}");
         }
     }
 }

@@ -145,16 +145,26 @@ pub struct Backward {
     pub uses_cas: bool,
 }
 
-/// Pixels per invocation of the blend backward on this device, as (rows, columns): each invocation
-/// owns that block of a tile, so a Gaussian's reductions and atomics are shared by its pixels. On
-/// lavapipe (llvmpipe, 100k Gaussians at 512x512 and a trained 12k scene at 96x72) 1/2/4/8/16 rows
-/// of one column took 931/575/377/278/268 ms and 94/59/41/34/29 ms (forward blend 210 and 23 ms).
-/// GPUs keep a pixel per invocation (gsplat's layout) until measured there.
-pub fn blend_layout(info: &crate::gpu::DeviceInfo) -> (u32, u32) {
+/// Pixels per invocation of the backward blend passes on one device: each invocation owns a block
+/// of a tile, so a Gaussian's reductions and atomics are shared by its pixels.
+#[derive(Clone, Copy, Debug)]
+pub struct BlendLayout {
+    /// The color backward's block, rows x columns (each 1, 2, 4, 8 or 16).
+    pub rows: u32,
+    pub cols: u32,
+    /// The feature backward's column of rows (1, 2, 4, 8 or 16).
+    pub feature_rows: u32,
+}
+
+/// The layout for this device. On lavapipe (llvmpipe, 100k Gaussians at 512x512 and a trained 12k
+/// scene at 96x72) the color backward with 1/2/4/8/16 rows of one column took 931/575/377/278/268
+/// ms and 94/59/41/34/29 ms (forward blend 210 and 23 ms), 16 x 2 249 ms. GPUs keep a pixel per
+/// invocation (gsplat's layout) until measured there.
+pub fn blend_layout(info: &crate::gpu::DeviceInfo) -> BlendLayout {
     if info.device_type == "CPU" {
-        (16, 2)
+        BlendLayout { rows: 16, cols: 2, feature_rows: 4 }
     } else {
-        (1, 1)
+        BlendLayout { rows: 1, cols: 1, feature_rows: 1 }
     }
 }
 
@@ -164,12 +174,12 @@ impl Backward {
         Self::with_layout(gpu, force_cas, blend_layout(gpu.info()))
     }
 
-    /// As `new`, with the blend backward's pixels per invocation (rows, columns: each 1, 2, 4, 8 or
-    /// 16) given instead of chosen for the device (tests run every layout on one device).
-    pub fn with_layout(gpu: &Gpu, force_cas: bool, layout: (u32, u32)) -> Result<Backward> {
-        let (rows, cols) = layout;
-        if ![rows, cols].iter().all(|v| matches!(v, 1 | 2 | 4 | 8 | 16)) {
-            anyhow::bail!("blend backward: {rows} x {cols} pixels per invocation (each 1, 2, 4, 8 or 16)");
+    /// As `new`, with the backward blend passes' pixels per invocation given instead of chosen for
+    /// the device (tests run every layout on one device).
+    pub fn with_layout(gpu: &Gpu, force_cas: bool, layout: BlendLayout) -> Result<Backward> {
+        let BlendLayout { rows, cols, feature_rows } = layout;
+        if ![rows, cols, feature_rows].iter().all(|v| matches!(v, 1 | 2 | 4 | 8 | 16)) {
+            anyhow::bail!("backward blend layout {layout:?}: each of 1, 2, 4, 8 or 16");
         }
         let cas = force_cas || !gpu.info().float_atomic_add;
         let (blend, project, features) = if cas {
@@ -181,7 +191,12 @@ impl Backward {
             gpu: gpu.clone(),
             blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, cols, 16 / cols, 16 / rows])?,
             project: ComputePipeline::new(gpu, "project_backward", project)?,
-            features: ComputePipeline::new(gpu, "blend_features_backward", features)?,
+            features: ComputePipeline::specialized(
+                gpu,
+                "blend_features_backward",
+                features,
+                &[feature_rows, 16 / feature_rows],
+            )?,
             params: Buffer::new(
                 gpu,
                 "backward params",

@@ -540,4 +540,3 @@ mod moved {
         intersections as u64 * (4 + 8 + 16 + 16) + pixels as u64 * 32 + tiles as u64 * 8
     }
 }
-

@@ -298,7 +298,8 @@ impl Trainer {
             * (adam_elements(f.means, &m.means)
                 + adam_elements(f.log_scales, &m.log_scales)
                 + adam_elements(f.quats, &m.quats))
-            + super::adam::BYTES_PER_ELEMENT * (adam_elements(f.opacity, &m.opacity_logits) + adam_elements(f.sh, &m.sh));
+            + super::adam::BYTES_PER_ELEMENT
+                * (adam_elements(f.opacity, &m.opacity_logits) + adam_elements(f.sh, &m.sh));
         let geometry = [
             (f.means, &s.means, &g.means, &m.means, self.position_lr()),
             (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE),
