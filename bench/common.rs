@@ -161,7 +161,12 @@ impl PassStats {
         for (p, ms, bytes) in self.medians() {
             let roofline = if bytes > 0 {
                 let gbps = bytes as f64 / (ms * 1e6);
-                format!("  {:>9.1} MB {:>7.2} GB/s {:>5.1} % of copy", bytes as f64 / 1e6, gbps, 100.0 * gbps / roof_gbps)
+                format!(
+                    "  {:>9.1} MB {:>7.2} GB/s {:>5.1} % of copy",
+                    bytes as f64 / 1e6,
+                    gbps,
+                    100.0 * gbps / roof_gbps
+                )
             } else {
                 String::new()
             };

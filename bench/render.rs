@@ -81,5 +81,8 @@ fn main() {
         );
     }
     let path = common::results_path(&format!("render-{}.json", common::device_slug(&gpu)));
-    common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "copy_bandwidth": roof, "frames": frames, "rows": rows }));
+    common::write_json(
+        &path,
+        &serde_json::json!({ "device": gpu.info().summary(), "copy_bandwidth": roof, "frames": frames, "rows": rows }),
+    );
 }
