@@ -17,7 +17,7 @@ pub struct DemoArgs {
     #[arg(long, default_value = "demo_out")]
     pub out: PathBuf,
     /// Small and fast (64x48, 16 views, 3 objects, 500 training iterations) instead of 96x72, 24
-    /// views, 4 objects, 800 iterations: about 3 instead of about 10 minutes on 2 CPU cores.
+    /// views, 4 objects, 800 iterations: about 20 seconds instead of about a minute on 2 CPU cores.
     #[arg(long)]
     pub quick: bool,
     /// Labels of the synth objects to remove at once (the scene has 3 in --quick, 4 otherwise).
