@@ -38,7 +38,7 @@ struct CopyPush {
 /// Measures both copies of `bytes` (a multiple of 16) `repeats` times; each result is the median.
 /// A copy moves 2 x `bytes` (read and write), which is what the GB/s count.
 pub fn measure(gpu: &Gpu, bytes: u64, repeats: usize) -> Result<CopyBandwidth> {
-    if bytes == 0 || bytes % 16 != 0 || repeats == 0 {
+    if bytes == 0 || !bytes.is_multiple_of(16) || repeats == 0 {
         bail!("copy bandwidth: need a positive multiple of 16 bytes and at least one repeat");
     }
     let src = Buffer::new(gpu, "bandwidth source", bytes, MemoryKind::Device)?;
@@ -64,8 +64,8 @@ pub fn measure(gpu: &Gpu, bytes: u64, repeats: usize) -> Result<CopyBandwidth> {
         let t = rec.submit_and_wait()?;
         let gbps = |name: &str| t.iter().find(|p| p.pass == name).map(|p| 2.0 * bytes as f64 / (p.ms * 1e6));
         transfer.push(gbps("transfer").ok_or_else(|| anyhow::anyhow!("copy bandwidth: the device has no timestamps"))?);
-        for k in 0..shapes.len() {
-            shader[k].push(gbps(&format!("shader {k}")).unwrap());
+        for (k, times) in shader.iter_mut().enumerate() {
+            times.push(gbps(&format!("shader {k}")).unwrap());
         }
     }
     // the first round warms up allocations and caches
