@@ -8,9 +8,9 @@
 mod common;
 
 use cogeo::gpu::{Buffer, Recorder};
-use cogeo::render::backward::{Backward, BlendLayout, PixelGradients, SceneGradients};
+use cogeo::render::backward::{Backward, PixelGradients, SceneGradients};
 use cogeo::render::reference::render_reference;
-use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
+use cogeo::render::{BlendLayout, Rasterizer, RenderSettings, SceneBuffers};
 use cogeo::rng::Rng;
 use cogeo::scene::{Camera, GaussianScene};
 use common::{gpu, logit};
@@ -310,7 +310,7 @@ fn feature_gradients_match_finite_differences() {
 #[test]
 fn blend_backward_pixel_layouts_agree() {
     // The blend backward gives each invocation a block of 1..16 x 1..2 pixels
-    // (render::backward::blend_layout picks per device); every layout must give the gradients of the
+    // (render::BlendLayout::for_device picks per device); every layout must give the gradients of the
     // device's own, which the finite-difference tests above check. The camera's 44x34 leaves partial
     // tiles and columns.
     let scene = scene(31, 60, 1);
@@ -324,7 +324,7 @@ fn blend_backward_pixel_layouts_agree() {
             [g.means.clone(), g.log_scales.clone(), g.quats.clone(), g.opacity_logits.clone(), g.sh.clone()]
         };
         for (rows, cols) in [(1, 1), (2, 1), (4, 1), (8, 1), (16, 1), (1, 2), (16, 2)] {
-            let layout = BlendLayout { rows, cols, feature_rows: 1 };
+            let layout = BlendLayout { backward_rows: rows, backward_cols: cols, ..BlendLayout::PIXEL };
             let other = gpu_gradients(&scene, &cam, bg, &w, None, cas, Some(layout));
             for (k, (a, b)) in groups(&other).iter().zip(groups(&reference)).enumerate() {
                 let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
@@ -353,7 +353,7 @@ fn feature_backward_layouts_agree() {
         let scale = reference.iter().fold(0f32, |m, v| m.max(v.abs()));
         assert!(scale > 0.0, "no feature gradient at all");
         for feature_rows in [1, 2, 4, 8, 16] {
-            let layout = BlendLayout { rows: 1, cols: 1, feature_rows };
+            let layout = BlendLayout { feature_rows, ..BlendLayout::PIXEL };
             let other = gpu_gradients(&scene, &cam, [0.0; 3], &w, Some((&feats, d)), cas, Some(layout)).features;
             let err = other.iter().zip(&reference).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
             assert!(err <= 1e-5 * scale, "{feature_rows} rows, cas {cas}: max difference {err} of {scale}");

@@ -5,7 +5,7 @@
 mod common;
 
 use cogeo::render::reference::{render_reference, ReferenceImage};
-use cogeo::render::{Rasterizer, RenderOutput, RenderSettings, SceneBuffers};
+use cogeo::render::{BlendLayout, Rasterizer, RenderOutput, RenderSettings, SceneBuffers};
 use cogeo::scene::{Camera, GaussianScene};
 use common::{gpu, random_features, random_scene, test_camera, SceneMix};
 
@@ -166,7 +166,7 @@ fn rendering_is_deterministic_across_calls_and_buffer_reuse() {
 
 #[test]
 fn every_blend_layout_renders_the_same_bits() {
-    // blend.comp gives each invocation a column of 1..16 pixels (render::blend_rows picks per
+    // blend.comp gives each invocation a column of 1..16 pixels (render::BlendLayout::for_device picks per
     // device); every pixel makes the same decisions in any layout, so every output is bit-identical
     // to the device's own layout, which the tests above check against the f64 reference. Odd sizes
     // leave partial tiles and columns; the dense opaque mix stops pixels early at different points.
@@ -180,7 +180,8 @@ fn every_blend_layout_renders_the_same_bits() {
         let reference = Rasterizer::new(&g).unwrap().render(&buffers, &cam, &settings).unwrap();
         assert!(reference.alpha.iter().any(|&a| a > 0.5), "scene {k} renders nothing");
         for rows in [1, 2, 4, 8, 16] {
-            let out = Rasterizer::with_rows(&g, rows).unwrap().render(&buffers, &cam, &settings).unwrap();
+            let layout = BlendLayout { forward_rows: rows, ..BlendLayout::PIXEL };
+            let out = Rasterizer::with_layout(&g, layout).unwrap().render(&buffers, &cam, &settings).unwrap();
             assert_eq!(out.rgb, reference.rgb, "scene {k}, {rows} rows: color");
             assert_eq!(out.alpha, reference.alpha, "scene {k}, {rows} rows: alpha");
             assert_eq!(out.expected_depth, reference.expected_depth, "scene {k}, {rows} rows: depth");

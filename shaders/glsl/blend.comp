@@ -2,7 +2,7 @@
 // Tile rasterizer: one workgroup per 16x16 tile composites the tile's depth-sorted Gaussians front to
 // back. Outputs RGB (+ background), alpha, accumulated depth, expected depth, and the per-pixel state the
 // backward pass replays: final transmittance and the index past the last blended intersection.
-// Each invocation owns a column of ROWS pixels (the workgroup is 16 x 16/ROWS; render::blend_rows
+// Each invocation owns a column of ROWS pixels (the workgroup is 16 x 16/ROWS; render::BlendLayout
 // picks ROWS per device), so a Gaussian's parameters are read from shared memory once for ROWS
 // pixels, and rows out of the Gaussian's reach (row_reach) are skipped. Every pixel makes exactly
 // the decisions of blend_weight, whatever ROWS is.

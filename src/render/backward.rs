@@ -4,7 +4,7 @@
 //! `_cas` twin that accumulates with compare-and-swap on devices without float atomics.
 
 use super::params::RenderParams;
-use super::SceneBuffers;
+use super::{BlendLayout, SceneBuffers};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
 use anyhow::Result;
@@ -145,42 +145,17 @@ pub struct Backward {
     pub uses_cas: bool,
 }
 
-/// Pixels per invocation of the backward blend passes on one device: each invocation owns a block
-/// of a tile, so a Gaussian's reductions and atomics are shared by its pixels.
-#[derive(Clone, Copy, Debug)]
-pub struct BlendLayout {
-    /// The color backward's block, rows x columns (each 1, 2, 4, 8 or 16).
-    pub rows: u32,
-    pub cols: u32,
-    /// The feature backward's column of rows (1, 2, 4, 8 or 16).
-    pub feature_rows: u32,
-}
-
-/// The layout for this device. On lavapipe (llvmpipe, 100k Gaussians at 512x512 and a trained 12k
-/// scene at 96x72) the color backward with 1/2/4/8/16 rows of one column took 931/575/377/278/268
-/// ms and 94/59/41/34/29 ms (forward blend 210 and 23 ms), 16 x 2 249 ms. GPUs keep a pixel per
-/// invocation (gsplat's layout) until measured there.
-pub fn blend_layout(info: &crate::gpu::DeviceInfo) -> BlendLayout {
-    if info.device_type == "CPU" {
-        BlendLayout { rows: 16, cols: 2, feature_rows: 4 }
-    } else {
-        BlendLayout { rows: 1, cols: 1, feature_rows: 1 }
-    }
-}
-
 impl Backward {
     /// `force_cas` selects the compare-and-swap variants even where float atomics exist (tests).
     pub fn new(gpu: &Gpu, force_cas: bool) -> Result<Backward> {
-        Self::with_layout(gpu, force_cas, blend_layout(gpu.info()))
+        Self::with_layout(gpu, force_cas, BlendLayout::for_device(gpu.info()))
     }
 
     /// As `new`, with the backward blend passes' pixels per invocation given instead of chosen for
     /// the device (tests run every layout on one device).
     pub fn with_layout(gpu: &Gpu, force_cas: bool, layout: BlendLayout) -> Result<Backward> {
-        let BlendLayout { rows, cols, feature_rows } = layout;
-        if ![rows, cols, feature_rows].iter().all(|v| matches!(v, 1 | 2 | 4 | 8 | 16)) {
-            anyhow::bail!("backward blend layout {layout:?}: each of 1, 2, 4, 8 or 16");
-        }
+        layout.check()?;
+        let BlendLayout { backward_rows: rows, backward_cols: cols, feature_rows, .. } = layout;
         let cas = force_cas || !gpu.info().float_atomic_add;
         let (blend, project, features) = if cas {
             (shaders::BLEND_BACKWARD_CAS, shaders::PROJECT_BACKWARD_CAS, shaders::BLEND_FEATURES_BACKWARD_CAS)

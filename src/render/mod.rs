@@ -186,30 +186,55 @@ pub(crate) fn grow(n: u64) -> u64 {
     (n + n / 4).max(1024)
 }
 
-/// Pixels per invocation of the forward blend on this device (blend.comp): each invocation owns a
-/// column of them and reads each Gaussian from shared memory once for all. On llvmpipe rows
-/// 1/4/8/16 took 231/129/119/124 ms (100k Gaussians at 512x512) and 22.6/12.6/10.8/11.6 ms (a
-/// trained 12k scene at 96x72), so CPU devices use 8; GPUs keep a pixel per invocation (the INRIA
-/// and gsplat layout) until measured there.
-pub fn blend_rows(info: &crate::gpu::DeviceInfo) -> u32 {
-    if info.device_type == "CPU" {
-        8
-    } else {
-        1
+/// Pixels per invocation of the blend passes on one device. An invocation owns a block of a 16x16
+/// tile, so it reads each Gaussian from shared memory once for the block (forward) and shares a
+/// Gaussian's subgroup reductions and atomics over it (backward). Each count is 1, 2, 4, 8 or 16.
+#[derive(Clone, Copy, Debug)]
+pub struct BlendLayout {
+    /// blend.comp: a column of this many rows.
+    pub forward_rows: u32,
+    /// blend_backward: a block of rows x columns.
+    pub backward_rows: u32,
+    pub backward_cols: u32,
+    /// blend_features_backward: a column of this many rows.
+    pub feature_rows: u32,
+}
+
+impl BlendLayout {
+    /// One pixel per invocation: the INRIA and gsplat layout.
+    pub const PIXEL: BlendLayout = BlendLayout { forward_rows: 1, backward_rows: 1, backward_cols: 1, feature_rows: 1 };
+
+    /// The layout for this device. Measured on llvmpipe (100k Gaussians at 512x512, and a trained 12k
+    /// scene at 96x72): forward rows 1/4/8/16 took 231/129/119/124 and 22.6/12.6/10.8/11.6 ms; the
+    /// color backward with 1/2/4/8/16 rows of one column 931/575/377/278/268 and 94/59/41/34/29 ms,
+    /// 16 x 2 249 ms. GPUs keep a pixel per invocation until measured there.
+    pub fn for_device(info: &crate::gpu::DeviceInfo) -> BlendLayout {
+        if info.device_type == "CPU" {
+            BlendLayout { forward_rows: 8, backward_rows: 16, backward_cols: 2, feature_rows: 4 }
+        } else {
+            BlendLayout::PIXEL
+        }
+    }
+
+    pub(crate) fn check(&self) -> Result<()> {
+        let counts = [self.forward_rows, self.backward_rows, self.backward_cols, self.feature_rows];
+        if !counts.iter().all(|v| matches!(v, 1 | 2 | 4 | 8 | 16)) {
+            bail!("blend layout {self:?}: each count must be 1, 2, 4, 8 or 16");
+        }
+        Ok(())
     }
 }
 
 impl Rasterizer {
     pub fn new(gpu: &Gpu) -> Result<Rasterizer> {
-        Self::with_rows(gpu, blend_rows(gpu.info()))
+        Self::with_layout(gpu, BlendLayout::for_device(gpu.info()))
     }
 
-    /// As `new`, with the forward blend's pixels per invocation `rows` (1, 2, 4, 8 or 16) given
-    /// instead of chosen for the device (tests run every layout on one device).
-    pub fn with_rows(gpu: &Gpu, rows: u32) -> Result<Rasterizer> {
-        if !matches!(rows, 1 | 2 | 4 | 8 | 16) {
-            bail!("blend: {rows} rows per invocation (1, 2, 4, 8 or 16)");
-        }
+    /// As `new`, with the forward blend's pixels per invocation (`layout.forward_rows`) given instead
+    /// of chosen for the device (tests run every layout on one device).
+    pub fn with_layout(gpu: &Gpu, layout: BlendLayout) -> Result<Rasterizer> {
+        layout.check()?;
+        let rows = layout.forward_rows;
         Ok(Rasterizer {
             gpu: gpu.clone(),
             project: ComputePipeline::new(gpu, "project", shaders::PROJECT)?,

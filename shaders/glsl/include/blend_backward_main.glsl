@@ -21,7 +21,7 @@
 #include "blend_common.glsl"
 
 // ROWS x COLS pixels per invocation and the workgroup's 16/COLS x 16/ROWS are set per device by
-// render::backward::blend_layout. An invocation's pixels are its rows in COLS columns 16/COLS apart.
+// render::BlendLayout. An invocation's pixels are its rows in COLS columns 16/COLS apart.
 layout(constant_id = 0) const uint ROWS = 1;
 layout(constant_id = 1) const uint COLS = 1;
 layout(constant_id = 2) const uint GROUP_WIDTH = 16;

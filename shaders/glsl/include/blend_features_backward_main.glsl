@@ -2,7 +2,7 @@
 // w_i dL/dF(pixel). The weights are replayed front to back with the forward's own decisions. Gradients
 // through the weights into geometry are not produced: feature training keeps geometry frozen.
 // As in the color backward, each invocation owns a column of ROWS pixels (specialization constants,
-// render::backward::blend_layout), sums a Gaussian's feature gradients over them in registers before
+// render::BlendLayout), sums a Gaussian's feature gradients over them in registers before
 // the subgroup reduction and the atomics, and skips rows out of the Gaussian's reach.
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
