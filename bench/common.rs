@@ -150,27 +150,26 @@ impl PassStats {
         }
     }
 
-    /// Median time of each pass in first-seen order: (pass, ms, bytes).
-    pub fn medians(&self) -> Vec<(String, f64, u64)> {
-        self.order.iter().map(|p| (p.clone(), median(self.ms[p].clone()), self.bytes[p])).collect()
+    /// Each pass in first-seen order with its median time and its bytes.
+    pub fn medians(&self) -> Vec<cogeo::gpu::PassTiming> {
+        self.order
+            .iter()
+            .map(|p| cogeo::gpu::PassTiming { pass: p.clone(), ms: median(self.ms[p].clone()), bytes: self.bytes[p] })
+            .collect()
     }
 
     /// Prints one line per pass: time, and where the pass states its bytes, the MB it moves, its
     /// GB/s and the share of the roof (the copy bandwidth) that is.
     pub fn print(&self, indent: &str, roof_gbps: f64) {
-        for (p, ms, bytes) in self.medians() {
-            let roofline = if bytes > 0 {
-                let gbps = bytes as f64 / (ms * 1e6);
-                format!(
-                    "  {:>9.1} MB {:>7.2} GB/s {:>5.1} % of copy",
-                    bytes as f64 / 1e6,
-                    gbps,
-                    100.0 * gbps / roof_gbps
-                )
-            } else {
-                String::new()
-            };
-            println!("{indent}{p:<20} {ms:>10.2} ms{roofline}");
+        for t in self.medians() {
+            let roofline = t
+                .gbps()
+                .map(|gbps| {
+                    let mb = t.bytes as f64 / 1e6;
+                    format!("  {mb:>9.1} MB {gbps:>7.2} GB/s {:>5.1} % of copy", 100.0 * gbps / roof_gbps)
+                })
+                .unwrap_or_default();
+            println!("{indent}{:<20} {:>10.2} ms{roofline}", t.pass, t.ms);
         }
     }
 
@@ -178,9 +177,9 @@ impl PassStats {
     pub fn json(&self, roof_gbps: f64) -> Vec<serde_json::Value> {
         self.medians()
             .into_iter()
-            .map(|(p, ms, bytes)| {
-                let gbps = (bytes > 0).then(|| bytes as f64 / (ms * 1e6));
-                serde_json::json!({"pass": p, "ms": ms, "bytes": (bytes > 0).then_some(bytes), "gbps": gbps,
+            .map(|t| {
+                let gbps = t.gbps();
+                serde_json::json!({"pass": t.pass, "ms": t.ms, "bytes": (t.bytes > 0).then_some(t.bytes), "gbps": gbps,
                                    "share_of_copy": gbps.map(|g| g / roof_gbps)})
             })
             .collect()

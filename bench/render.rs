@@ -41,7 +41,7 @@ fn main() {
                 isect = out.num_intersections;
                 stats.add(&out.timings);
             }
-            let gpu_total: f64 = stats.medians().iter().map(|p| p.1).sum();
+            let gpu_total: f64 = stats.medians().iter().map(|p| p.ms).sum();
             let wall_ms = common::median(wall);
             println!("  {w}x{h}: {isect} intersections, GPU {gpu_total:.1} ms, wall {wall_ms:.1} ms (incl. readback)");
             stats.print("      ", roof.roof_gbps());
