@@ -153,7 +153,7 @@ pub fn remove(
     };
     let masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
     clock.lap("masks");
-    let mut result = selection.background.clone();
+    let mut result = selection.background; // moved: only the removed mask and count are used below
     let mut completed: Vec<Completed> = Vec::new();
     let mut per_view = Vec::new();
     let (mut fusion, mut pruned, mut prune_used) = (None, 0, None);
