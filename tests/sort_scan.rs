@@ -42,15 +42,22 @@ fn check_sort(g: &cogeo::gpu::Gpu, sort: &mut RadixSort, keys: &[u32], bits: u32
 #[test]
 fn radix_sort_matches_stable_cpu_sort_around_block_boundaries() {
     let g = gpu();
-    let mut sort = RadixSort::new(&g).unwrap();
+    // both ways of matching a row's equal digits (broadcasts on CPU devices, ballots on GPUs)
+    for by_broadcast in [true, false] {
+        let mut sort = RadixSort::with_matching(&g, by_broadcast).unwrap();
+        sort_around_block_boundaries(&g, &mut sort);
+    }
+}
+
+fn sort_around_block_boundaries(g: &cogeo::gpu::Gpu, sort: &mut RadixSort) {
     let mut rng = Rng::new(3);
     let b = BLOCK_KEYS as usize;
     for &n in &[1usize, 2, 15, 16, 17, 255, 256, 257, b - 1, b, b + 1, 2 * b - 1, 2 * b + 1, 3 * b + 77, 100_003] {
         let full: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
-        check_sort(&g, &mut sort, &full, 32);
+        check_sort(g, sort, &full, 32);
         // heavy duplicates: stability decides the value order
         let dups: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 7) as u32).collect();
-        check_sort(&g, &mut sort, &dups, 32);
+        check_sort(g, sort, &dups, 32);
     }
 }
 
@@ -60,14 +67,17 @@ fn radix_sort_partial_key_widths_and_degenerate_inputs() {
     let mut sort = RadixSort::new(&g).unwrap();
     let mut rng = Rng::new(5);
     let n = 50_000;
-    // 13 bits (tile ids at 1080p), 31 bits (positive float depths), odd pass counts (5 bits -> 2, 9 -> 3)
-    for bits in [5u32, 9, 13, 31] {
+    // 13 bits (tile ids at 1080p), 31 bits (positive float depths), odd pass counts (5 bits -> 1,
+    // 17 -> 3) and a last pass narrower than a digit (9, 13, 17, 31)
+    for bits in [5u32, 9, 13, 17, 31] {
         let keys: Vec<u32> = (0..n).map(|_| (rng.next_u64() as u32) & ((1u32 << bits) - 1)).collect();
         check_sort(&g, &mut sort, &keys, bits);
     }
     // only the low bits are sorted on: high bits must travel with the key but not order it
     let keys: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
     check_sort(&g, &mut sort, &keys, 8);
+    // ... also where the width ends inside a digit: bits 13-15 share the second digit with 8-12
+    check_sort(&g, &mut sort, &keys, 13);
     check_sort(&g, &mut sort, &vec![42u32; n], 32);
     let descending: Vec<u32> = (0..n as u32).rev().collect();
     check_sort(&g, &mut sort, &descending, 32);

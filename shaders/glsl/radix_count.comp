@@ -4,20 +4,17 @@
 #include "common.glsl"
 #include "radix_common.glsl"
 
-layout(local_size_x = 256) in;
-shared uint s_hist[RADIX];
-
 void main() {
     uint block = linear_group_id();
     if (block >= num_blocks) return;  // uniform over the workgroup
-    uint t = gl_LocalInvocationID.x;
-    if (t < RADIX) s_hist[t] = 0;
+    for (uint d = gl_LocalInvocationID.x; d < RADIX; d += gl_WorkGroupSize.x) s_hist[d] = 0;
     barrier();
-    uvec4 packed = count_run(block, t);
-    for (uint d = 0; d < RADIX; d++) {
-        uint c = unpack_count(packed, d);
-        if (c != 0) atomicAdd(s_hist[d], c);
+    uint start = block * block_keys, end = min(start + block_keys, n);
+    for (uint i = start + gl_LocalInvocationID.x; i < end; i += gl_WorkGroupSize.x) {
+        atomicAdd(s_hist[digit_of(keys_in.v[i])], 1u);
     }
     barrier();
-    if (t < RADIX) histogram.v[t * num_blocks + block] = s_hist[t];
+    for (uint d = gl_LocalInvocationID.x; d < RADIX; d += gl_WorkGroupSize.x) {
+        histogram.v[d * num_blocks + block] = s_hist[d];
+    }
 }

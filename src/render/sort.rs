@@ -1,15 +1,18 @@
-//! Stable GPU radix sort of (u32 key, u32 value) pairs: 4-bit digits, reduce-then-scan per pass
-//! (radix_count.comp, exclusive scan of the digit-major histogram, radix_scatter.comp). Needs no
-//! subgroup operations and no forward-progress guarantees between workgroups.
+//! Stable GPU radix sort of (u32 key, u32 value) pairs: 8-bit digits, reduce-then-scan per pass
+//! (radix_count.comp, exclusive scan of the digit-major histogram, radix_scatter.comp). A block's
+//! keys are ranked by one subgroup walking it in rows (the workgroup is one subgroup of the device's
+//! size) and no workgroup waits on another. Only the key bits asked for are sorted: tile ids take
+//! ceil(log2(tiles)) bits, so a 1080p frame's tile sort is two passes.
 
 use super::scan::PrefixScan;
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
-use anyhow::Result;
+use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 
-pub const BLOCK_KEYS: u32 = 256 * 16;
-pub const RADIX_BITS: u32 = 4;
+/// Keys per workgroup (one subgroup walks them in rows of its size; radix_common.glsl).
+pub const BLOCK_KEYS: u32 = 4096;
+pub const RADIX_BITS: u32 = 8;
 const RADIX: u32 = 1 << RADIX_BITS;
 
 #[repr(C)]
@@ -23,7 +26,9 @@ struct SortPush {
     n: u32,
     shift: u32,
     num_blocks: u32,
-    pad: u32,
+    digit_mask: u32,
+    block_keys: u32,
+    pad: [u32; 3],
 }
 
 pub struct RadixSort {
@@ -35,17 +40,30 @@ pub struct RadixSort {
     capacity: u64,
 }
 
-/// Number of 4-bit passes needed to sort keys below 2^bits.
+/// Number of 8-bit passes needed to sort keys below 2^bits.
 pub fn passes_for_bits(bits: u32) -> u32 {
     bits.div_ceil(RADIX_BITS)
 }
 
 impl RadixSort {
+    /// The sort for this device: on CPU devices a row's equal digits are found by broadcasts, elsewhere
+    /// by ballots (radix_common.glsl says why).
     pub fn new(gpu: &Gpu) -> Result<RadixSort> {
+        Self::with_matching(gpu, gpu.info().device_type == "CPU")
+    }
+
+    /// As `new`, with the digit matching chosen: by broadcasts (`true`) or by ballots. Both are
+    /// correct on every device; the tests run both.
+    pub fn with_matching(gpu: &Gpu, by_broadcast: bool) -> Result<RadixSort> {
+        let subgroup = gpu.info().subgroup_size;
+        if !subgroup.is_power_of_two() || !(4..=128).contains(&subgroup) {
+            bail!("radix sort: subgroup size {subgroup} is not a power of two from 4 to 128");
+        }
+        let constants = [by_broadcast as u32, subgroup];
         Ok(RadixSort {
             gpu: gpu.clone(),
-            count: ComputePipeline::new(gpu, "radix_count", shaders::RADIX_COUNT)?,
-            scatter: ComputePipeline::new(gpu, "radix_scatter", shaders::RADIX_SCATTER)?,
+            count: ComputePipeline::specialized(gpu, "radix_count", shaders::RADIX_COUNT, &constants)?,
+            scatter: ComputePipeline::specialized(gpu, "radix_scatter", shaders::RADIX_SCATTER, &constants)?,
             scan: PrefixScan::new(gpu)?,
             histogram: None,
             capacity: 0,
@@ -97,7 +115,9 @@ impl RadixSort {
                 n,
                 shift: pass * RADIX_BITS,
                 num_blocks,
-                pad: 0,
+                digit_mask: (1u32 << (bits - pass * RADIX_BITS).min(RADIX_BITS)) - 1,
+                block_keys: BLOCK_KEYS,
+                pad: [0; 3],
             };
             rec.dispatch(&self.count, &push, dispatch_1d(num_blocks));
             self.scan.record(rec, hist, num_blocks * RADIX);

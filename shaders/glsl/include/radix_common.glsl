@@ -1,12 +1,22 @@
-// Reduce-then-scan LSD radix sort of 32-bit keys with 32-bit values, 4 bits per pass.
-// A block of BLOCK_KEYS keys is handled by one workgroup; thread t owns the contiguous run
-// [t * ITEMS, (t + 1) * ITEMS) of its block, so ranking a key needs only per-thread serial counts and
-// one workgroup scan: no subgroup operations (any subgroup size works) and no inter-workgroup
-// communication (no forward-progress assumptions). Stable: equal digits keep their input order.
-const uint SORT_THREADS = 256;
-const uint ITEMS = 16;
-const uint BLOCK_KEYS = SORT_THREADS * ITEMS;
-const uint RADIX = 16;
+// Reduce-then-scan LSD radix sort of 32-bit keys with 32-bit values, 8 bits per pass.
+// A block of block_keys keys is handled by one workgroup of one subgroup (the workgroup size is the
+// device's subgroup size: 8 on lavapipe, 32 on NVIDIA), which walks the block in order, one row of
+// consecutive keys per step (contiguous loads on a GPU, one SIMD row on a CPU driver). The keys of a
+// row that share a digit find each other (match_digit); the last of them bumps the block's running
+// digit offsets, so ranking needs no atomics, no per-subgroup histograms to clear and combine, and no
+// rank storage between phases. No workgroup waits on another (no forward-progress assumption).
+// Stable: rows in order, lanes in order, blocks in order.
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+
+// How a row's keys of one digit find each other: with RADIX_BITS ballots (GPUs, where a ballot is one
+// instruction), or by comparing with each lane's digit in turn (CPU drivers, where a subgroup is one
+// SIMD register and a ballot a serial loop over its lanes).
+layout(constant_id = 0) const bool MATCH_BY_BROADCAST = false;
+layout(local_size_x_id = 1) in;
+
+const uint RADIX_BITS = 8;
+const uint RADIX = 1u << RADIX_BITS;
 
 layout(push_constant) uniform Push {
     Uints keys_in;
@@ -17,21 +27,40 @@ layout(push_constant) uniform Push {
     uint n;
     uint shift;
     uint num_blocks;
+    uint digit_mask;   // (1 << bits of this pass) - 1: key bits above the sorted width never order
+    uint block_keys;
 };
 
-uint digit_of(uint key) { return (key >> shift) & (RADIX - 1u); }
+shared uint s_hist[RADIX];
 
-// Per-thread digit counts of its run, packed 8 bits per digit (a run holds at most 16 keys).
-uvec4 count_run(uint block, uint t) {
-    uvec4 packed = uvec4(0);
-    uint base = block * BLOCK_KEYS + t * ITEMS;
-    for (uint i = 0; i < ITEMS; i++) {
-        uint idx = base + i;
-        if (idx >= n) break;
-        uint d = digit_of(keys_in.v[idx]);
-        packed[d >> 2] += 1u << ((d & 3u) * 8u);
+uint digit_of(uint key) { return (key >> shift) & digit_mask; }
+
+// Among the lanes holding a valid key with digit d: how many come before this lane, how many there are,
+// and whether this lane is the last of them.
+void match_digit(uint d, bool valid, out uint before, out uint total, out bool last) {
+    if (MATCH_BY_BROADCAST) {
+        uint mine = valid ? d : 0xffffffffu;  // never equal to a valid digit
+        uint lane = gl_SubgroupInvocationID;
+        before = 0;
+        total = 0;
+        last = valid;
+        // bounded by the specialized workgroup size (the subgroup size the host read) so that the loop
+        // unrolls and each broadcast reads a constant lane
+        for (uint j = 0; j < gl_WorkGroupSize.x; j++) {
+            bool same = j < gl_SubgroupSize && subgroupBroadcast(mine, j) == mine;
+            total += same ? 1u : 0u;
+            before += (same && j < lane) ? 1u : 0u;
+            last = last && !(same && j > lane);
+        }
+    } else {
+        uvec4 peers = subgroupBallot(valid);
+        for (uint b = 0; b < RADIX_BITS; b++) {
+            bool bit = ((d >> b) & 1u) != 0;
+            uvec4 vote = subgroupBallot(bit);
+            peers &= bit ? vote : ~vote;
+        }
+        before = subgroupBallotExclusiveBitCount(peers);
+        total = subgroupBallotBitCount(peers);
+        last = valid && subgroupBallotFindMSB(peers) == gl_SubgroupInvocationID;
     }
-    return packed;
 }
-
-uint unpack_count(uvec4 packed, uint d) { return (packed[d >> 2] >> ((d & 3u) * 8u)) & 0xffu; }
