@@ -49,17 +49,24 @@ fn main() {
         trainer.iterate(&data, false).unwrap(); // warm-up
         let mut stats = common::PassStats::default();
         let mut wall = Vec::new();
+        let trips_before = gpu.round_trips();
         for _ in 0..iters {
             let t = Instant::now();
             trainer.iterate(&data, false).unwrap();
             wall.push(t.elapsed().as_secs_f64() * 1e3);
             stats.add(&trainer.last_timings);
         }
+        let trips = gpu.round_trips() - trips_before;
+        let (submits, readbacks) = (trips.submits as f64 / iters as f64, trips.readbacks as f64 / iters as f64);
         let total: f64 = stats.medians().iter().map(|p| p.ms).sum();
         let wall_ms = common::median(wall);
-        println!("{n} Gaussians at {w}x{h}: GPU {total:.1} ms, wall {wall_ms:.1} ms per iteration");
+        println!(
+            "{n} Gaussians at {w}x{h}: GPU {total:.1} ms, wall {wall_ms:.1} ms per iteration; \
+             {submits} submits and {readbacks} readbacks per iteration"
+        );
         stats.print("    ", roof.roof_gbps());
         rows.push(serde_json::json!({"gaussians": n, "width": w, "height": h, "gpu_ms": total, "wall_ms": wall_ms,
+            "submits_per_iteration": submits, "readbacks_per_iteration": readbacks,
             "passes": stats.json(roof.roof_gbps())}));
     }
     let path = common::results_path(&format!("train-{}.json", common::device_slug(&gpu)));

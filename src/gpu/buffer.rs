@@ -153,6 +153,7 @@ impl Buffer {
             return Ok(out);
         }
         let out_bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
+        self.gpu.round_trips.readbacks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         if let Some(ptr) = self.mapped() {
             unsafe { std::ptr::copy_nonoverlapping(ptr.add(offset as usize), out_bytes.as_mut_ptr(), out_bytes.len()) };
             return Ok(out);

@@ -171,6 +171,7 @@ impl Recorder {
                 let _guard = s.submit_lock.lock().unwrap();
                 device.queue_submit(s.queue, &submit, self.fence).context("vkQueueSubmit failed")?;
             }
+            s.round_trips.submits.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             device
                 .wait_for_fences(&[self.fence], true, u64::MAX)
                 .context("GPU work failed (device lost or timeout)")?;

@@ -16,6 +16,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr};
 use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// What the engine needs to know about the selected device.
@@ -73,6 +74,31 @@ pub(crate) struct GpuShared {
     pub(crate) info: DeviceInfo,
     /// Serializes queue submission (Vulkan requires external synchronization of the queue).
     pub(crate) submit_lock: Mutex<()>,
+    /// Host round trips so far: each a point where the host waits for the device.
+    pub(crate) round_trips: RoundTripCounters,
+}
+
+/// Counts of the host's waits on the device, so benches can report them per iteration.
+#[derive(Default)]
+pub(crate) struct RoundTripCounters {
+    pub(crate) submits: AtomicU64,
+    pub(crate) readbacks: AtomicU64,
+}
+
+/// Host round trips counted since the context was made: `submits` (each submission waits for its
+/// fence) and `readbacks` (device data copied to the host; on a discrete GPU each is a submission of
+/// its own as well).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RoundTrips {
+    pub submits: u64,
+    pub readbacks: u64,
+}
+
+impl std::ops::Sub for RoundTrips {
+    type Output = RoundTrips;
+    fn sub(self, earlier: RoundTrips) -> RoundTrips {
+        RoundTrips { submits: self.submits - earlier.submits, readbacks: self.readbacks - earlier.readbacks }
+    }
 }
 
 // SAFETY: the raw message-log pointer is owned by GpuShared and only read under its Mutex; every
@@ -386,6 +412,7 @@ impl Gpu {
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
                 info,
                 submit_lock: Mutex::new(()),
+                round_trips: RoundTripCounters::default(),
             }),
         })
     }
@@ -396,6 +423,12 @@ impl Gpu {
 
     pub fn device(&self) -> &ash::Device {
         &self.shared.device
+    }
+
+    /// Submissions and readbacks so far (subtract two readings for a span of work).
+    pub fn round_trips(&self) -> RoundTrips {
+        let c = &self.shared.round_trips;
+        RoundTrips { submits: c.submits.load(Ordering::Relaxed), readbacks: c.readbacks.load(Ordering::Relaxed) }
     }
 
     /// Validation messages (warnings and errors) seen so far; empty without validation.

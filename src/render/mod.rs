@@ -176,6 +176,9 @@ pub struct Rasterizer {
     sort: RadixSort,
     scan: scan::PrefixScan,
     params: Buffer,
+    /// Host-visible copy of the intersection count, written at the end of the first submission so
+    /// that reading it costs no submission of its own (on a discrete GPU a download would).
+    intersection_count: Buffer,
     frame: Option<FrameBuffers>,
     isect: Option<IntersectionBuffers>,
     image: Option<ImageBuffers>,
@@ -246,6 +249,7 @@ impl Rasterizer {
             sort: RadixSort::new(gpu)?,
             scan: scan::PrefixScan::new(gpu)?,
             params: Buffer::new(gpu, "render params", std::mem::size_of::<RenderParams>() as u64, MemoryKind::Upload)?,
+            intersection_count: Buffer::new(gpu, "intersection count", 4, MemoryKind::Readback)?,
             frame: None,
             isect: None,
             image: None,
@@ -368,9 +372,12 @@ impl Rasterizer {
         rec.mark_moved("depth sort", moved::sort(n, 31));
         rec.dispatch(&self.gather, &push, dispatch_1d((n + 1).div_ceil(256)));
         self.scan.record(&mut rec, &frame.isect_offsets, n + 1);
+        rec.copy_region(&frame.isect_offsets, n as u64 * 4, &self.intersection_count, 0, 4);
         rec.mark("tile count scan");
         let mut timings = rec.submit_and_wait()?;
-        let m = frame.isect_offsets.download_at::<u32>(&self.gpu, n as u64, 1)?[0];
+        // the one readback a frame needs: the intersection count sizes the buffers and dispatches of
+        // the second submission
+        let m = self.intersection_count.download::<u32>(&self.gpu, 1)?[0];
 
         // submission 2: emit intersections, sort by tile, find ranges, blend
         self.reserve_intersections(m)?;
