@@ -13,7 +13,7 @@ fn image(rng: &mut Rng, n: usize) -> Vec<f32> {
 }
 
 /// GPU loss value and gradient against the CPU reference and its central finite differences.
-fn check_loss(width: usize, height: usize, masked: bool, seed: u64) {
+fn check_loss(width: usize, height: usize, masked: bool, seed: u64, run: u32) {
     let g = gpu();
     let mut rng = Rng::new(seed);
     let hw = width * height;
@@ -35,7 +35,7 @@ fn check_loss(width: usize, height: usize, masked: bool, seed: u64) {
     targets.extend(&target);
     let target_buf = Buffer::from_slice(&g, "targets", &targets).unwrap();
     let mask_buf = Buffer::from_slice(&g, "mask", &mask).unwrap();
-    let mut loss = PhotometricLoss::new(&g).unwrap();
+    let mut loss = PhotometricLoss::with_run(&g, run).unwrap();
     let mut rec = Recorder::new(&g).unwrap();
     let inputs = LossInputs {
         render: &render_buf,
@@ -85,8 +85,12 @@ fn check_loss(width: usize, height: usize, masked: bool, seed: u64) {
 
 #[test]
 fn loss_value_and_gradient_match_cpu() {
-    check_loss(23, 19, false, 1);
-    check_loss(30, 17, true, 2);
+    // one output per invocation, and runs of 8 and 16 along the blurred axis (GPU and CPU devices),
+    // on sizes that are no multiple of a run
+    for run in [1, 8, 16] {
+        check_loss(23, 19, false, 1, run);
+        check_loss(30, 17, true, 2, run);
+    }
 }
 
 /// Five Adam steps on `n` elements with rates (lr, period, head, tail factor) against an f64 twin;

@@ -5,29 +5,40 @@
 #include "common.glsl"
 #include "ssim_window.glsl"
 
-layout(local_size_x = 64, local_size_y = 4) in;
+RUNS_ALONG_X;
 layout(push_constant) uniform Push { Floats render; Floats target; Floats stats; uint width; uint height; uint channels; };
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
-    if (id.x >= width || id.y >= height) return;
+    int x0 = int(id.x) * RUN;
+    if (x0 >= int(width) || id.y >= height) return;
     uint hw = width * height, n = hw * channels;
     uint row = id.z * hw + id.y * width;
-    ivec2 t = taps(int(id.x), width);
-    float sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
-    for (int k = t.x; k <= t.y; k++) {
-        uint i = row + uint(int(id.x) + k);
-        float x = render.v[i], y = target.v[i], w = W[k + 5];
-        sx += w * x;
-        sy += w * y;
-        sxx += w * (x * x);
-        syy += w * (y * y);
-        sxy += w * (x * y);
+    float wx[SPAN], wy[SPAN];
+    for (int j = 0; j < SPAN; j++) {
+        int p = x0 - 5 + j;
+        wx[j] = 0.0;
+        wy[j] = 0.0;
+        if (p >= 0 && p < int(width)) {
+            wx[j] = render.v[row + uint(p)];
+            wy[j] = target.v[row + uint(p)];
+        }
     }
-    uint o = row + id.x;
-    stats.v[o] = sx;
-    stats.v[n + o] = sy;
-    stats.v[2 * n + o] = sxx;
-    stats.v[3 * n + o] = syy;
-    stats.v[4 * n + o] = sxy;
+    for (int r = 0; r < RUN && x0 + r < int(width); r++) {
+        float sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+        for (int k = 0; k < 11; k++) {
+            float x = wx[r + k], y = wy[r + k], w = W[k];
+            sx += w * x;
+            sy += w * y;
+            sxx += w * (x * x);
+            syy += w * (y * y);
+            sxy += w * (x * y);
+        }
+        uint o = row + uint(x0 + r);
+        stats.v[o] = sx;
+        stats.v[n + o] = sy;
+        stats.v[2 * n + o] = sxx;
+        stats.v[3 * n + o] = syy;
+        stats.v[4 * n + o] = sxy;
+    }
 }

@@ -9,7 +9,7 @@
 #include "common.glsl"
 #include "ssim_window.glsl"
 
-layout(local_size_x = 64, local_size_y = 4) in;
+RUNS_ALONG_Y;
 layout(push_constant) uniform Push { Floats stats; Floats terms; Floats ssim_map; Floats mask; uint width; uint height; uint channels; float inv_weight_sum; uint has_mask; };
 
 const float C1 = 0.0001;  // 0.01^2
@@ -17,31 +17,50 @@ const float C2 = 0.0009;  // 0.03^2
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
-    if (id.x >= width || id.y >= height) return;
+    int y0 = int(id.y) * RUN;
+    if (id.x >= width || y0 >= int(height)) return;
     uint hw = width * height, n = hw * channels;
     uint column = id.z * hw + id.x;
-    ivec2 t = taps(int(id.y), height);
-    float mx = 0.0, my = 0.0, exx = 0.0, eyy = 0.0, exy = 0.0;
-    for (int k = t.x; k <= t.y; k++) {
-        uint i = column + uint(int(id.y) + k) * width;
-        float w = W[k + 5];
-        mx += w * stats.v[i];
-        my += w * stats.v[n + i];
-        exx += w * stats.v[2 * n + i];
-        eyy += w * stats.v[3 * n + i];
-        exy += w * stats.v[4 * n + i];
+    // windows of the five x-blurred statistics down this column
+    float wmx[SPAN], wmy[SPAN], wxx[SPAN], wyy[SPAN], wxy[SPAN];
+    for (int j = 0; j < SPAN; j++) {
+        int p = y0 - 5 + j;
+        wmx[j] = 0.0;
+        wmy[j] = 0.0;
+        wxx[j] = 0.0;
+        wyy[j] = 0.0;
+        wxy[j] = 0.0;
+        if (p >= 0 && p < int(height)) {
+            uint i = column + uint(p) * width;
+            wmx[j] = stats.v[i];
+            wmy[j] = stats.v[n + i];
+            wxx[j] = stats.v[2 * n + i];
+            wyy[j] = stats.v[3 * n + i];
+            wxy[j] = stats.v[4 * n + i];
+        }
     }
-    float sxx = exx - mx * mx;
-    float syy = eyy - my * my;
-    float sxy = exy - mx * my;
-    float n1 = 2.0 * mx * my + C1, n2 = 2.0 * sxy + C2;
-    float d1 = mx * mx + my * my + C1, d2 = sxx + syy + C2;
-    float d = d1 * d2;
-    float s = n1 * n2 / d;
-    uint pix = id.y * width + id.x, o = id.z * hw + pix;
-    float w = (has_mask != 0 ? mask.v[pix] : 1.0) * inv_weight_sum;
-    terms.v[o] = w * (2.0 * my * (n2 - n1) / d - 2.0 * mx * s * (d2 - d1) / d);
-    terms.v[n + o] = w * (-s / d2);
-    terms.v[2 * n + o] = w * (2.0 * n1 / d);
-    ssim_map.v[o] = w * s;
+    for (int r = 0; r < RUN && y0 + r < int(height); r++) {
+        float mx = 0.0, my = 0.0, exx = 0.0, eyy = 0.0, exy = 0.0;
+        for (int k = 0; k < 11; k++) {
+            float w = W[k];
+            mx += w * wmx[r + k];
+            my += w * wmy[r + k];
+            exx += w * wxx[r + k];
+            eyy += w * wyy[r + k];
+            exy += w * wxy[r + k];
+        }
+        float sxx = exx - mx * mx;
+        float syy = eyy - my * my;
+        float sxy = exy - mx * my;
+        float n1 = 2.0 * mx * my + C1, n2 = 2.0 * sxy + C2;
+        float d1 = mx * mx + my * my + C1, d2 = sxx + syy + C2;
+        float d = d1 * d2;
+        float s = n1 * n2 / d;
+        uint pix = uint(y0 + r) * width + id.x, o = id.z * hw + pix;
+        float w = (has_mask != 0 ? mask.v[pix] : 1.0) * inv_weight_sum;
+        terms.v[o] = w * (2.0 * my * (n2 - n1) / d - 2.0 * mx * s * (d2 - d1) / d);
+        terms.v[n + o] = w * (-s / d2);
+        terms.v[2 * n + o] = w * (2.0 * n1 / d);
+        ssim_map.v[o] = w * s;
+    }
 }

@@ -1,11 +1,18 @@
 // SSIM's window: the 11-tap Gaussian (sigma 1.5), normalized, applied separably with zero padding
-// (as in the INRIA reference). The loss passes run on a 2D grid, one invocation per pixel of one
-// plane (gl_GlobalInvocationID.xy = pixel, .z = channel or plane), so no pass divides an index.
+// (as in the INRIA reference). The loss passes run on a 2D grid (gl_GlobalInvocationID.z = channel or
+// plane), so no pass divides an index. Each invocation of a blurring pass owns a run of RUN
+// consecutive outputs along the blurred axis and reads the RUN + 10 inputs under them once into
+// registers (a sliding window), instead of 11 gathered loads per output.
 
 // exp(-k^2 / (2 * 1.5^2)) for k = -5..5, normalized to sum 1
 const float W[11] = float[11](1.028380084e-03, 7.598758135e-03, 3.600077213e-02, 1.093606895e-01, 2.130055377e-01, 2.660117249e-01, 2.130055377e-01, 1.093606895e-01, 3.600077213e-02, 7.598758135e-03, 1.028380084e-03);
 
-// The taps k = -5..5 that fall inside [0, size) around position `at`: [lo, hi].
-ivec2 taps(int at, uint size) {
-    return ivec2(max(-5, -at), min(5, int(size) - 1 - at));
-}
+// RUN is chosen per device (train/loss.rs): 16 on CPU devices, where loads are per-lane gathers; 8 on
+// GPUs, where the 5 x (RUN + 10) window registers of ssim_terms_y would otherwise spill.
+layout(constant_id = 0) const int RUN = 8;
+const int SPAN = RUN + 10;
+
+// Workgroup shapes: runs along x are 8 runs (64 pixels) wide and 8 rows high; runs along y are 64
+// columns wide, so each row of a run is one contiguous 64-float read.
+#define RUNS_ALONG_X layout(local_size_x = 8, local_size_y = 8) in
+#define RUNS_ALONG_Y layout(local_size_x = 64, local_size_y = 1) in
