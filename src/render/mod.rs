@@ -553,10 +553,10 @@ mod moved {
         n as u64 * ((12 + 12 + 16 + 4 + sh) + (8 + 16 + 12 + 4 + 4 + 4 + 16 + 4))
     }
 
-    /// A stable radix sort of `count` (key, value) pairs by `bits` bits: per 8-bit pass the pairs are
-    /// read twice (count, scatter) and written once.
+    /// A stable radix sort of `count` (key, value) pairs by `bits` bits: per 8-bit pass the count
+    /// reads the keys, the scatter reads the pairs and writes them.
     pub fn sort(count: u32, bits: u32) -> u64 {
-        count as u64 * 24 * super::sort::passes_for_bits(bits) as u64
+        count as u64 * (4 + 8 + 8) * super::sort::passes_for_bits(bits) as u64
     }
 
     /// Per Gaussian its index, touched count, offset, 2D mean, conic and tile rectangle in; per
