@@ -42,22 +42,15 @@ fn check_sort(g: &cogeo::gpu::Gpu, sort: &mut RadixSort, keys: &[u32], bits: u32
 #[test]
 fn radix_sort_matches_stable_cpu_sort_around_block_boundaries() {
     let g = gpu();
-    // both ways of matching a row's equal digits (broadcasts on CPU devices, ballots on GPUs)
-    for by_broadcast in [true, false] {
-        let mut sort = RadixSort::with_matching(&g, by_broadcast).unwrap();
-        sort_around_block_boundaries(&g, &mut sort);
-    }
-}
-
-fn sort_around_block_boundaries(g: &cogeo::gpu::Gpu, sort: &mut RadixSort) {
+    let mut sort = RadixSort::new(&g).unwrap();
     let mut rng = Rng::new(3);
     let b = BLOCK_KEYS as usize;
     for &n in &[1usize, 2, 15, 16, 17, 255, 256, 257, b - 1, b, b + 1, 2 * b - 1, 2 * b + 1, 3 * b + 77, 100_003] {
         let full: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
-        check_sort(g, sort, &full, 32);
+        check_sort(&g, &mut sort, &full, 32);
         // heavy duplicates: stability decides the value order
         let dups: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 7) as u32).collect();
-        check_sort(g, sort, &dups, 32);
+        check_sort(&g, &mut sort, &dups, 32);
     }
 }
 

@@ -9,7 +9,7 @@ void main() {
     if (block >= num_blocks) return;  // uniform over the workgroup
     for (uint d = gl_LocalInvocationID.x; d < RADIX; d += gl_WorkGroupSize.x) s_hist[d] = 0;
     barrier();
-    uint start = block * block_keys, end = min(start + block_keys, n);
+    uint start = block * BLOCK_KEYS, end = min(start + BLOCK_KEYS, n);
     for (uint i = start + gl_LocalInvocationID.x; i < end; i += gl_WorkGroupSize.x) {
         atomicAdd(s_hist[digit_of(keys_in.v[i])], 1u);
     }

@@ -15,7 +15,7 @@ void main() {
     // The workgroup is one subgroup wherever the driver honours the reported size; if it splits it,
     // the first subgroup walks the whole block alone, which stays correct.
     if (gl_SubgroupID != 0) return;
-    uint start = block * block_keys, end = min(start + block_keys, n);
+    uint start = block * BLOCK_KEYS, end = min(start + BLOCK_KEYS, n);
     for (uint row = start; row < end; row += gl_SubgroupSize) {
         uint idx = row + gl_SubgroupInvocationID;
         bool valid = idx < end;

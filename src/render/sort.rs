@@ -10,7 +10,7 @@ use crate::shaders;
 use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 
-/// Keys per workgroup (one subgroup walks them in rows of its size; radix_common.glsl).
+/// Keys per workgroup (one subgroup walks them in rows of its size; BLOCK_KEYS in radix_common.glsl).
 pub const BLOCK_KEYS: u32 = 4096;
 pub const RADIX_BITS: u32 = 8;
 const RADIX: u32 = 1 << RADIX_BITS;
@@ -27,8 +27,6 @@ struct SortPush {
     shift: u32,
     num_blocks: u32,
     digit_mask: u32,
-    block_keys: u32,
-    pad: [u32; 3],
 }
 
 pub struct RadixSort {
@@ -46,20 +44,13 @@ pub fn passes_for_bits(bits: u32) -> u32 {
 }
 
 impl RadixSort {
-    /// The sort for this device: on CPU devices a row's equal digits are found by broadcasts, elsewhere
-    /// by ballots (radix_common.glsl says why).
+    /// The sort for this device; its workgroups are one subgroup of the device's size.
     pub fn new(gpu: &Gpu) -> Result<RadixSort> {
-        Self::with_matching(gpu, gpu.info().device_type == "CPU")
-    }
-
-    /// As `new`, with the digit matching chosen: by broadcasts (`true`) or by ballots. Both are
-    /// correct on every device; the tests run both.
-    pub fn with_matching(gpu: &Gpu, by_broadcast: bool) -> Result<RadixSort> {
         let subgroup = gpu.info().subgroup_size;
         if !subgroup.is_power_of_two() || !(4..=128).contains(&subgroup) {
             bail!("radix sort: subgroup size {subgroup} is not a power of two from 4 to 128");
         }
-        let constants = [by_broadcast as u32, subgroup];
+        let constants = [subgroup];
         Ok(RadixSort {
             gpu: gpu.clone(),
             count: ComputePipeline::specialized(gpu, "radix_count", shaders::RADIX_COUNT, &constants)?,
@@ -116,8 +107,6 @@ impl RadixSort {
                 shift: pass * RADIX_BITS,
                 num_blocks,
                 digit_mask: (1u32 << (bits - pass * RADIX_BITS).min(RADIX_BITS)) - 1,
-                block_keys: BLOCK_KEYS,
-                pad: [0; 3],
             };
             rec.dispatch(&self.count, &push, dispatch_1d(num_blocks));
             self.scan.record(rec, hist, num_blocks * RADIX);
