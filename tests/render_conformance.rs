@@ -166,7 +166,7 @@ fn rendering_is_deterministic_across_calls_and_buffer_reuse() {
 
 #[test]
 fn every_blend_layout_renders_the_same_bits() {
-    // blend.comp gives each invocation a column of 1..16 pixels (render::BlendLayout::for_device picks per
+    // blend.comp and blend_features.comp give each invocation a column of 1..16 pixels (render::BlendLayout::for_device picks per
     // device); every pixel makes the same decisions in any layout, so every output is bit-identical
     // to the device's own layout, which the tests above check against the f64 reference. Odd sizes
     // leave partial tiles and columns; the dense opaque mix stops pixels early at different points.
@@ -174,9 +174,11 @@ fn every_blend_layout_renders_the_same_bits() {
     let mixes = [SceneMix::default(), SceneMix { normal: 0, tiny: 0, huge: 0, behind: 5, faint: 10, opaque: 600 }];
     for (k, mix) in mixes.into_iter().enumerate() {
         let scene = random_scene(61 + k as u64, 2, mix);
-        let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
+        // 40 channels: a 32-channel pass (rows capped by its accumulators) and an 8-channel one
+        let features = random_features(71 + k as u64, scene.len(), 40);
+        let buffers = SceneBuffers::upload(&g, &scene, Some((&features, 40))).unwrap();
         let cam = test_camera(83, 37);
-        let settings = RenderSettings { background: [0.2, 0.3, 0.4], ..Default::default() };
+        let settings = RenderSettings { background: [0.2, 0.3, 0.4], features: true, ..Default::default() };
         let reference = Rasterizer::new(&g).unwrap().render(&buffers, &cam, &settings).unwrap();
         assert!(reference.alpha.iter().any(|&a| a > 0.5), "scene {k} renders nothing");
         for rows in [1, 2, 4, 8, 16] {
@@ -186,6 +188,7 @@ fn every_blend_layout_renders_the_same_bits() {
             assert_eq!(out.alpha, reference.alpha, "scene {k}, {rows} rows: alpha");
             assert_eq!(out.expected_depth, reference.expected_depth, "scene {k}, {rows} rows: depth");
             assert_eq!(out.n_contrib, reference.n_contrib, "scene {k}, {rows} rows: contributors");
+            assert_eq!(out.features, reference.features, "scene {k}, {rows} rows: features");
         }
     }
 }
