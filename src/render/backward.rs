@@ -138,7 +138,10 @@ pub struct Backward {
     gpu: Gpu,
     blend: ComputePipeline,
     project: ComputePipeline,
-    features: ComputePipeline,
+    /// blend_features_backward per channel count of a dispatch (specialized on first use).
+    features: Vec<(u32, ComputePipeline)>,
+    features_spirv: &'static [u8],
+    feature_rows: u32,
     params: Buffer,
     view: Option<ViewGradients>,
     /// Compare-and-swap accumulation instead of float atomics.
@@ -166,12 +169,9 @@ impl Backward {
             gpu: gpu.clone(),
             blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, cols, 16 / cols, 16 / rows])?,
             project: ComputePipeline::new(gpu, "project_backward", project)?,
-            features: ComputePipeline::specialized(
-                gpu,
-                "blend_features_backward",
-                features,
-                &[feature_rows, 16 / feature_rows],
-            )?,
+            features: Vec::new(),
+            features_spirv: features,
+            feature_rows,
             params: Buffer::new(
                 gpu,
                 "backward params",
@@ -181,6 +181,31 @@ impl Backward {
             view: None,
             uses_cas: cas,
         })
+    }
+
+    /// Creates the feature backward pipelines `feature_dim` channels need. A column holds ROWS x
+    /// CHANNELS upstream gradients, so its rows are the layout's, halved until that is at most 64.
+    fn feature_pipelines(&mut self, feature_dim: u32) -> Result<()> {
+        let mut offset = 0;
+        while offset < feature_dim {
+            let channels = super::FEATURE_CHANNELS_PER_PASS.min(feature_dim - offset);
+            if !self.features.iter().any(|(c, _)| *c == channels) {
+                let mut rows = self.feature_rows;
+                while rows > 1 && rows * channels > 64 {
+                    rows /= 2;
+                }
+                let constants = [rows, 16 / rows, channels];
+                let pipeline = ComputePipeline::specialized(
+                    &self.gpu,
+                    "blend_features_backward",
+                    self.features_spirv,
+                    &constants,
+                )?;
+                self.features.push((channels, pipeline));
+            }
+            offset += channels;
+        }
+        Ok(())
     }
 
     fn reserve(&mut self, n: u32) -> Result<()> {
@@ -216,6 +241,9 @@ impl Backward {
         features_only: bool,
     ) -> Result<()> {
         self.reserve(frame.num_gaussians)?;
+        if upstream.features.is_some() {
+            self.feature_pipelines(frame.feature_dim)?;
+        }
         let v = self.view.as_ref().unwrap();
         let params = BackwardParams {
             dl_drgb: upstream.rgb.address(),
@@ -264,8 +292,10 @@ impl Backward {
                     channel_offset: offset,
                     pad: 0,
                 };
-                rec.dispatch(&self.features, &p, dispatch_1d(tiles));
-                offset += 32;
+                let channels = super::FEATURE_CHANNELS_PER_PASS.min(frame.feature_dim - offset);
+                let pipeline = &self.features.iter().find(|(c, _)| *c == channels).unwrap().1;
+                rec.dispatch(pipeline, &p, dispatch_1d(tiles));
+                offset += channels;
             }
             rec.mark("features backward");
         }

@@ -18,7 +18,7 @@ use sort::RadixSort;
 
 pub const TILE: u32 = 16;
 /// Channels the feature blend pass handles per dispatch.
-const FEATURE_CHANNELS_PER_PASS: u32 = 32;
+pub(crate) const FEATURE_CHANNELS_PER_PASS: u32 = 32;
 
 /// A scene's attributes on the GPU (structure of arrays, one buffer per attribute).
 pub struct SceneBuffers {

@@ -3,7 +3,8 @@
 // through the weights into geometry are not produced: feature training keeps geometry frozen.
 // As in the color backward, each invocation owns a column of ROWS pixels (specialization constants,
 // render::BlendLayout), sums a Gaussian's feature gradients over them in registers before
-// the subgroup reduction and the atomics, and skips rows out of the Gaussian's reach.
+// the subgroup reduction and the atomics, and skips rows out of the Gaussian's reach. CHANNELS, the
+// channels of one dispatch, is a specialization constant so the gradients stay in registers.
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
@@ -17,12 +18,12 @@
 
 layout(constant_id = 0) const uint ROWS = 1;
 layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
+layout(constant_id = 2) const uint CHANNELS = 32;
 layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; uint channel_offset; };
 
 const uint BATCH = 256;
 const uint THREADS = 16 * GROUP_HEIGHT;
-const uint CHANNELS = 32;
 shared vec2 s_xy[BATCH];
 shared vec4 s_conic_opacity[BATCH];
 shared float s_reach[BATCH];
@@ -88,7 +89,8 @@ void main() {
             }
             if (!subgroupAny(any_weight)) continue;  // uniform over the subgroup
             uint g = s_gauss[j];
-            for (uint c = 0; c < channels; c++) {
+            for (uint c = 0; c < CHANNELS; c++) {
+                if (c >= channels) break;
                 float v = 0.0;
                 for (uint r = 0; r < ROWS; r++) v += w[r] * dl_df[r][c];
                 v = subgroupAdd(v);
