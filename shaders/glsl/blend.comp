@@ -3,9 +3,14 @@
 // back. Outputs RGB (+ background), alpha, accumulated depth, expected depth, and the per-pixel state the
 // backward pass replays: final transmittance and the index past the last blended intersection.
 // Each invocation owns a column of ROWS pixels (the workgroup is 16 x 16/ROWS; render::BlendLayout
-// picks ROWS per device), so a Gaussian's parameters are read from shared memory once for ROWS
-// pixels, and rows out of the Gaussian's reach (row_reach) are skipped. Every pixel makes exactly
-// the decisions of blend_weight, whatever ROWS is.
+// picks ROWS per device), so a Gaussian's parameters are fetched once for ROWS pixels, and rows out
+// of the Gaussian's reach (row_reach) are skipped. Every pixel makes exactly the decisions of
+// blend_weight, whatever ROWS is. Gaussians reach the lanes by subgroup broadcast, not shared memory:
+// on lavapipe a shared load is a loop over the lanes, a broadcast one register move (trained 31.5k
+// scene at 256x192: 210 -> 130 ms).
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "common.glsl"
 #include "render_params.glsl"
 #include "blend_common.glsl"
@@ -15,19 +20,10 @@ layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
 layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; };
 
-const uint BATCH = 256;
-const uint THREADS = 16 * GROUP_HEIGHT;
-shared vec2 s_xy[BATCH];
-shared vec4 s_conic_opacity[BATCH];
-shared vec4 s_color_depth[BATCH];
-shared float s_reach[BATCH];  // row_reach: rows farther from the center are skipped
-shared uint s_any_alive;
-
 void main() {
     uint tile = tile_id();
     if (tile >= p.tiles_x * p.tiles_y) return;  // uniform over the workgroup
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
-    uint local = gl_LocalInvocationIndex;
 
     uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
     vec2 pixel[ROWS];
@@ -48,34 +44,39 @@ void main() {
         lane_finished = lane_finished && finished[r];
     }
 
-    for (uint batch = start; batch < end; batch += BATCH) {
-        barrier();  // everyone is done with the previous batch and with s_any_alive
-        if (local == 0) s_any_alive = 0;
-        barrier();
-        if (!lane_finished) atomicOr(s_any_alive, 1u);
-        for (uint k = local; k < BATCH && batch + k < end; k += THREADS) {
-            uint g = p.isect_gauss.v[batch + k];
-            s_xy[k] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            s_conic_opacity[k] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
-                                      p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
-            s_color_depth[k] = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
-            s_reach[k] = row_reach(s_conic_opacity[k]);
+    // Each subgroup walks the list on its own, a subgroup's worth of Gaussians at a time: lane l
+    // loads the batch's l-th Gaussian into registers, and every lane then takes them in order by
+    // broadcast. No shared memory and no barriers, and a subgroup stops when its own pixels are done.
+    // `lanes` counts the lanes present: a workgroup smaller than a subgroup fills only the low lanes.
+    uint lanes = subgroupBallotBitCount(subgroupBallot(true));
+    for (uint batch = start; batch < end; batch += lanes) {
+        if (subgroupAll(lane_finished)) break;
+        uint k = batch + gl_SubgroupInvocationID;
+        vec2 my_xy = vec2(0.0);
+        vec4 my_co = vec4(0.0), my_cd = vec4(0.0);
+        float my_reach = -1.0;  // past the end: reaches no row
+        if (k < end) {
+            uint g = p.isect_gauss.v[k];
+            my_xy = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
+            my_co = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1], p.conic_opacity.v[4 * g + 2],
+                         p.conic_opacity.v[4 * g + 3]);
+            my_cd = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
+            my_reach = row_reach(my_co);
         }
-        barrier();
-        if (s_any_alive == 0) break;
-        uint count = min(BATCH, end - batch);
-        for (uint j = 0; j < count && !lane_finished; j++) {
-            vec2 xy = s_xy[j];
-            vec4 co = s_conic_opacity[j];
-            float reach = s_reach[j];
+        uint count = min(lanes, end - batch);
+        for (uint j = 0; j < count; j++) {
+            vec2 xy = subgroupBroadcast(my_xy, j);
+            vec4 co = subgroupBroadcast(my_co, j);
+            float reach = subgroupBroadcast(my_reach, j);
+            vec4 cd = subgroupBroadcast(my_cd, j);
             lane_finished = true;
             for (uint r = 0; r < ROWS; r++) {
-                // the rows of a subgroup's lanes are the same, so this skip is uniform over it
+                // the rows of a subgroup's lanes are the same on a CPU driver, so this skip is uniform there
                 if (!finished[r] && abs(pixel[r].y - xy.y) <= reach) {
                     float w = blend_weight(pixel[r], xy, co, T[r], finished[r]);
                     if (w > 0.0) {
-                        C[r] += w * s_color_depth[j].rgb;
-                        D[r] += w * s_color_depth[j].w;
+                        C[r] += w * cd.rgb;
+                        D[r] += w * cd.w;
                         W[r] += w;
                         n_contrib[r] = batch + j + 1;
                     }

@@ -209,13 +209,13 @@ impl BlendLayout {
     /// One pixel per invocation: the INRIA and gsplat layout.
     pub const PIXEL: BlendLayout = BlendLayout { forward_rows: 1, backward_rows: 1, backward_cols: 1, feature_rows: 1 };
 
-    /// The layout for this device. Measured on llvmpipe (100k Gaussians at 512x512, and a trained 12k
-    /// scene at 96x72): forward rows 1/4/8/16 took 231/129/119/124 and 22.6/12.6/10.8/11.6 ms; the
-    /// color backward with 1/2/4/8/16 rows of one column 931/575/377/278/268 and 94/59/41/34/29 ms,
-    /// 16 x 2 249 ms. GPUs keep a pixel per invocation until measured there.
+    /// The layout for this device. Measured on llvmpipe with the subgroup-fed blends (a trained 31.5k
+    /// scene at 256x192, ms per pass, repeated runs): forward rows 2/4/8/16 took 216/149/106-132/71-100;
+    /// the color backward with 4 x 2, 8 x 1, 8 x 2, 16 x 1 and 16 x 2 pixels 201/206/123/155/95-161
+    /// (one pixel per invocation: 437 and 895). GPUs keep a pixel per invocation until measured there.
     pub fn for_device(info: &crate::gpu::DeviceInfo) -> BlendLayout {
         if info.device_type == "CPU" {
-            BlendLayout { forward_rows: 8, backward_rows: 16, backward_cols: 2, feature_rows: 4 }
+            BlendLayout { forward_rows: 16, backward_rows: 16, backward_cols: 2, feature_rows: 4 }
         } else {
             BlendLayout::PIXEL
         }

@@ -1,4 +1,4 @@
-// Backward of blend.comp. One 16x16 workgroup per tile walks the tile's intersections back to front,
+// Backward of blend.comp. One 16x16 workgroup per tile (each of its subgroups on its own) walks the tile's intersections back to front,
 // recovering each contributor's transmittance from the final one (T_i = T_{i+1} / (1 - alpha_i)) and the
 // sums of what lies behind it, so
 //   dC/dalpha_i = T_i c_i - (sum_{j>i} w_j c_j + T_final bg) / (1 - alpha_i)
@@ -12,6 +12,7 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #ifndef NO_FLOAT_ATOMICS
 #extension GL_EXT_shader_atomic_float : require
 #endif
@@ -30,20 +31,10 @@ const uint PIXELS = ROWS * COLS;
 layout(local_size_x_id = 2, local_size_y_id = 3) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; };
 
-const uint BATCH = 256;
-const uint THREADS = GROUP_WIDTH * GROUP_HEIGHT;
-shared vec2 s_xy[BATCH];
-shared vec4 s_conic_opacity[BATCH];
-shared vec4 s_color_depth[BATCH];
-shared uint s_gauss[BATCH];
-shared float s_reach[BATCH];  // row_reach: rows farther from the center are skipped
-shared uint s_last;  // largest n_contrib of the tile: nothing after it contributed anywhere
-
 void main() {
     uint tile = tile_id();
     if (tile >= p.tiles_x * p.tiles_y) return;
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
-    uint local = gl_LocalInvocationIndex;
     uint hw = p.width * p.height;
     vec3 bg = vec3(p.background[0], p.background[1], p.background[2]);
 
@@ -85,39 +76,45 @@ void main() {
         behind_weight[r] = 0.0;
     }
 
+    // Each subgroup walks the list on its own, from the last Gaussian any of its pixels blended, a
+    // subgroup's worth at a time: lane l loads the batch's l-th Gaussian into registers and every lane
+    // takes them back to front by broadcast (on lavapipe a shared load is a loop over the lanes, a
+    // broadcast one register move: 237 -> 129 ms on a trained 31.5k scene at 256x192). No shared
+    // memory and no barriers. `lanes` counts the lanes present: a workgroup smaller than a subgroup
+    // fills only the low lanes.
     uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
-    if (local == 0) s_last = 0;
-    barrier();
-    atomicMax(s_last, last_max);
-    barrier();
-    end = min(end, max(s_last, start));
-
+    end = min(end, max(subgroupMax(last_max), start));
+    uint lanes = subgroupBallotBitCount(subgroupBallot(true));
     for (uint batch_end = end; batch_end > start;) {
-        uint count = min(BATCH, batch_end - start);
+        uint count = min(lanes, batch_end - start);
         uint batch_start = batch_end - count;
-        barrier();
-        for (uint k = local; k < count; k += THREADS) {
-            uint g = p.isect_gauss.v[batch_start + k];
-            s_gauss[k] = g;
-            s_xy[k] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            s_conic_opacity[k] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
-                                      p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
-            s_color_depth[k] = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
-            s_reach[k] = row_reach(s_conic_opacity[k]);
+        uint my_g = 0;
+        vec2 my_xy = vec2(0.0);
+        vec4 my_co = vec4(0.0), my_cd = vec4(0.0);
+        float my_reach = -1.0;
+        if (gl_SubgroupInvocationID < count) {
+            my_g = p.isect_gauss.v[batch_start + gl_SubgroupInvocationID];
+            my_xy = vec2(p.xy.v[2 * my_g], p.xy.v[2 * my_g + 1]);
+            my_co = vec4(p.conic_opacity.v[4 * my_g], p.conic_opacity.v[4 * my_g + 1],
+                         p.conic_opacity.v[4 * my_g + 2], p.conic_opacity.v[4 * my_g + 3]);
+            my_cd = vec4(p.color.v[3 * my_g], p.color.v[3 * my_g + 1], p.color.v[3 * my_g + 2], p.depth.v[my_g]);
+            my_reach = row_reach(my_co);
         }
-        barrier();
         for (uint jj = count; jj > 0; jj--) {
             uint j = jj - 1;
             uint idx = batch_start + j;
-            vec4 co = s_conic_opacity[j];
+            vec4 co = subgroupBroadcast(my_co, j);
+            vec2 xy = subgroupBroadcast(my_xy, j);
+            vec4 cd = subgroupBroadcast(my_cd, j);
+            float reach = subgroupBroadcast(my_reach, j);
+            uint g = subgroupBroadcast(my_g, j);  // here, where every lane is active
             vec2 g_xy = vec2(0.0);
             vec3 g_conic = vec3(0.0);
             float g_opacity = 0.0, g_depth = 0.0;
             vec3 g_color = vec3(0.0);
             bool contributed = false;
-            float reach = s_reach[j];
             for (uint r = 0; r < PIXELS; r++) {
-                vec2 d = s_xy[j] - pixel[r];
+                vec2 d = xy - pixel[r];
                 // the rows of a subgroup's lanes are the same, so the reach test is uniform over it
                 if (idx >= last[r] || abs(d.y) > reach) continue;
                 float power = -0.5 * (co.x * d.x * d.x + co.z * d.y * d.y) - co.y * d.x * d.y;
@@ -131,8 +128,8 @@ void main() {
                 float one_minus = 1.0 - alpha;
                 T[r] = T[r] / one_minus;
                 float w = alpha * T[r];
-                vec3 c = s_color_depth[j].rgb;
-                float z = s_color_depth[j].w;
+                vec3 c = cd.rgb;
+                float z = cd.w;
                 g_color += w * dl_dc[r];
                 g_depth += w * dl_dd[r];
                 float dl_dalpha = dot(dl_dc[r], T[r] * c - behind_color[r] / one_minus)
@@ -160,7 +157,6 @@ void main() {
             g_depth = subgroupAdd(g_depth);
             if (subgroupElect() && (g_opacity != 0.0 || any(notEqual(g_color, vec3(0.0))) || g_depth != 0.0
                                     || any(notEqual(g_xy, vec2(0.0))))) {
-                uint g = s_gauss[j];
                 grad_add(b.grad_xy, 2 * g, g_xy.x);
                 grad_add(b.grad_xy, 2 * g + 1, g_xy.y);
                 grad_add(b.grad_conic, 3 * g, g_conic.x);
