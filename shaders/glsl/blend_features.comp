@@ -1,10 +1,13 @@
 #version 460
 // N-dim feature maps blended with the same weights as the color pass, reusing its sorted intersection
 // lists. Handles channels [channel_offset, channel_offset + CHANNELS) per dispatch so any feature_dim
-// works. Laid out as blend.comp: each invocation owns a column of ROWS pixels, a Gaussian's
-// parameters and features are read from shared memory once for the column, and rows out of the
+// works. Laid out and fed as blend.comp: each invocation owns a column of ROWS pixels, a Gaussian's
+// parameters and features reach it by subgroup broadcast once for the column, and rows out of the
 // Gaussian's reach are skipped. CHANNELS is a specialization constant so the accumulators are
 // registers, not a dynamically indexed array. Every pixel makes exactly the decisions of blend_weight.
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "common.glsl"
 #include "render_params.glsl"
 #include "blend_common.glsl"
@@ -15,20 +18,10 @@ layout(constant_id = 2) const uint CHANNELS = 32;
 layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; uint channel_offset; };
 
-// 64 Gaussians of up to 32 channels: 8 KiB of features, well inside 32 KiB of shared memory
-const uint BATCH = 64;
-const uint THREADS = 16 * GROUP_HEIGHT;
-shared vec2 s_xy[BATCH];
-shared vec4 s_conic_opacity[BATCH];
-shared float s_reach[BATCH];
-shared float s_features[BATCH * CHANNELS];
-shared uint s_any_alive;
-
 void main() {
     uint tile = tile_id();
     if (tile >= p.tiles_x * p.tiles_y) return;  // uniform over the workgroup
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
-    uint local = gl_LocalInvocationIndex;
 
     uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
     vec2 pixel[ROWS];
@@ -45,43 +38,52 @@ void main() {
     }
     for (uint k = 0; k < ROWS * CHANNELS; k++) acc[k] = 0.0;
 
-    for (uint batch = start; batch < end; batch += BATCH) {
-        barrier();  // everyone is done with the previous batch and with s_any_alive
-        if (local == 0) s_any_alive = 0;
-        barrier();
-        if (!lane_finished) atomicOr(s_any_alive, 1u);
-        for (uint k = local; k < BATCH && batch + k < end; k += THREADS) {
-            uint g = p.isect_gauss.v[batch + k];
-            s_xy[k] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            s_conic_opacity[k] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
-                                      p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
-            s_reach[k] = row_reach(s_conic_opacity[k]);
+    // Fed as blend.comp: each subgroup walks the list on its own, lane l loading the batch's l-th
+    // Gaussian and its features into registers, every lane taking them in order by broadcast.
+    uint channels = min(CHANNELS, p.feature_dim - channel_offset);
+    uint lanes = subgroupBallotBitCount(subgroupBallot(true));
+    for (uint batch = start; batch < end; batch += lanes) {
+        if (subgroupAll(lane_finished)) break;
+        uint k = batch + gl_SubgroupInvocationID;
+        vec2 my_xy = vec2(0.0);
+        vec4 my_co = vec4(0.0);
+        float my_reach = -1.0;  // past the end: reaches no row
+        float my_features[CHANNELS];
+        for (uint c = 0; c < CHANNELS; c++) my_features[c] = 0.0;
+        if (k < end) {
+            uint g = p.isect_gauss.v[k];
+            my_xy = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
+            my_co = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1], p.conic_opacity.v[4 * g + 2],
+                         p.conic_opacity.v[4 * g + 3]);
+            my_reach = row_reach(my_co);
             uint base = g * p.feature_dim + channel_offset;
-            uint channels = min(CHANNELS, p.feature_dim - channel_offset);
-            for (uint c = 0; c < CHANNELS; c++) s_features[k * CHANNELS + c] = c < channels ? p.features.v[base + c] : 0.0;
+            for (uint c = 0; c < CHANNELS; c++) my_features[c] = c < channels ? p.features.v[base + c] : 0.0;
         }
-        barrier();
-        if (s_any_alive == 0) break;
-        uint count = min(BATCH, end - batch);
-        for (uint j = 0; j < count && !lane_finished; j++) {
-            vec2 xy = s_xy[j];
-            vec4 co = s_conic_opacity[j];
-            float reach = s_reach[j];
+        uint count = min(lanes, end - batch);
+        for (uint j = 0; j < count; j++) {
+            vec2 xy = subgroupBroadcast(my_xy, j);
+            vec4 co = subgroupBroadcast(my_co, j);
+            float reach = subgroupBroadcast(my_reach, j);
+            float w[ROWS];
+            bool any_weight = false;
             lane_finished = true;
             for (uint r = 0; r < ROWS; r++) {
-                // the rows of a subgroup's lanes are the same, so this skip is uniform over it
-                if (!finished[r] && abs(pixel[r].y - xy.y) <= reach) {
-                    float w = blend_weight(pixel[r], xy, co, T[r], finished[r]);
-                    if (w > 0.0) {
-                        for (uint c = 0; c < CHANNELS; c++) acc[r * CHANNELS + c] += w * s_features[j * CHANNELS + c];
-                    }
-                }
+                w[r] = 0.0;
+                // the rows of a subgroup's lanes are the same on a CPU driver, so this skip is uniform there
+                if (!finished[r] && abs(pixel[r].y - xy.y) <= reach) w[r] = blend_weight(pixel[r], xy, co, T[r], finished[r]);
+                any_weight = any_weight || w[r] > 0.0;
                 lane_finished = lane_finished && finished[r];
+            }
+            if (!subgroupAny(any_weight)) continue;  // uniform: the features are only fetched when used
+            for (uint c = 0; c < CHANNELS; c++) {
+                float f = subgroupBroadcast(my_features[c], j);
+                for (uint r = 0; r < ROWS; r++) {
+                    if (w[r] > 0.0) acc[r * CHANNELS + c] += w[r] * f;
+                }
             }
         }
     }
     uint hw = p.width * p.height;
-    uint channels = min(CHANNELS, p.feature_dim - channel_offset);
     for (uint r = 0; r < ROWS; r++) {
         uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y * ROWS + r);
         if (pix.x >= p.width || pix.y >= p.height) continue;

@@ -8,6 +8,7 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #ifndef NO_FLOAT_ATOMICS
 #extension GL_EXT_shader_atomic_float : require
 #endif
@@ -22,19 +23,10 @@ layout(constant_id = 2) const uint CHANNELS = 32;
 layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; uint channel_offset; };
 
-const uint BATCH = 256;
-const uint THREADS = 16 * GROUP_HEIGHT;
-shared vec2 s_xy[BATCH];
-shared vec4 s_conic_opacity[BATCH];
-shared float s_reach[BATCH];
-shared uint s_gauss[BATCH];
-shared uint s_any_alive;
-
 void main() {
     uint tile = tile_id();
     if (tile >= p.tiles_x * p.tiles_y) return;
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
-    uint local = gl_LocalInvocationIndex;
     uint hw = p.width * p.height;
     uint channels = min(CHANNELS, p.feature_dim - channel_offset);
     vec2 pixel[ROWS];
@@ -55,28 +47,30 @@ void main() {
     }
 
     uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
-    for (uint batch = start; batch < end; batch += BATCH) {
-        // stop once every pixel of the tile has saturated, as the forward pass does: long tile
-        // lists behind opaque surfaces would otherwise be walked to the end
-        barrier();
-        if (local == 0) s_any_alive = 0;
-        barrier();
-        if (!lane_finished) atomicOr(s_any_alive, 1u);
-        for (uint k = local; k < BATCH && batch + k < end; k += THREADS) {
-            uint g = p.isect_gauss.v[batch + k];
-            s_gauss[k] = g;
-            s_xy[k] = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            s_conic_opacity[k] = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1],
-                                      p.conic_opacity.v[4 * g + 2], p.conic_opacity.v[4 * g + 3]);
-            s_reach[k] = row_reach(s_conic_opacity[k]);
+    // Fed as blend.comp: each subgroup walks the list on its own, lane l loading the batch's l-th
+    // Gaussian into registers and every lane taking them in order by broadcast; it stops once its
+    // own pixels have saturated, as the forward pass does.
+    uint lanes = subgroupBallotBitCount(subgroupBallot(true));
+    for (uint batch = start; batch < end; batch += lanes) {
+        if (subgroupAll(lane_finished)) break;
+        uint k = batch + gl_SubgroupInvocationID;
+        uint my_g = 0;
+        vec2 my_xy = vec2(0.0);
+        vec4 my_co = vec4(0.0);
+        float my_reach = -1.0;  // past the end: reaches no row
+        if (k < end) {
+            my_g = p.isect_gauss.v[k];
+            my_xy = vec2(p.xy.v[2 * my_g], p.xy.v[2 * my_g + 1]);
+            my_co = vec4(p.conic_opacity.v[4 * my_g], p.conic_opacity.v[4 * my_g + 1],
+                         p.conic_opacity.v[4 * my_g + 2], p.conic_opacity.v[4 * my_g + 3]);
+            my_reach = row_reach(my_co);
         }
-        barrier();
-        if (s_any_alive == 0) break;
-        uint count = min(BATCH, end - batch);
+        uint count = min(lanes, end - batch);
         for (uint j = 0; j < count; j++) {
-            vec2 xy = s_xy[j];
-            vec4 co = s_conic_opacity[j];
-            float reach = s_reach[j];
+            vec2 xy = subgroupBroadcast(my_xy, j);
+            vec4 co = subgroupBroadcast(my_co, j);
+            float reach = subgroupBroadcast(my_reach, j);
+            uint g = subgroupBroadcast(my_g, j);
             float w[ROWS];
             bool any_weight = false;
             lane_finished = true;
@@ -88,7 +82,6 @@ void main() {
                 lane_finished = lane_finished && finished[r];
             }
             if (!subgroupAny(any_weight)) continue;  // uniform over the subgroup
-            uint g = s_gauss[j];
             for (uint c = 0; c < CHANNELS; c++) {
                 if (c >= channels) break;
                 float v = 0.0;
