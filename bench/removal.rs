@@ -4,7 +4,7 @@
 //! truth with `cogeo eval`.
 //!
 //!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
-//!                                  --width 64 --height 48 --views 16 --supersample 1 --repeat-full
+//!                                  --width 160 --height 120 --views 16 --supersample 1 --repeat-full
 //!                                  --lpips-model lpips.onnx --fid-model inception.onnx --no-readme]
 //!
 //! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
@@ -59,7 +59,7 @@ fn main() {
     let wanted: Vec<String> =
         arg("--scenes", "one,two-of-three,three-of-four").split(',').map(str::to_string).collect();
     let (iters, width, height, views) =
-        (arg("--iters", "500"), arg("--width", "64"), arg("--height", "48"), arg("--views", "16"));
+        (arg("--iters", "500"), arg("--width", "160"), arg("--height", "120"), arg("--views", "16"));
     let supersample = arg("--supersample", "1");
     let repeat_full = args.iter().any(|a| a == "--repeat-full");
     let mut variants: Vec<(&str, &str, &[&str])> = VARIANTS.to_vec();
