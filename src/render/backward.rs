@@ -3,6 +3,7 @@
 //! to the stored parameters, accumulated over views) and blend_features_backward.comp. Each has a
 //! `_cas` twin that accumulates with compare-and-swap on devices without float atomics.
 
+use super::features::FeaturePipelines;
 use super::params::RenderParams;
 use super::{BlendLayout, SceneBuffers};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
@@ -138,10 +139,7 @@ pub struct Backward {
     gpu: Gpu,
     blend: ComputePipeline,
     project: ComputePipeline,
-    /// blend_features_backward per channel count of a dispatch (specialized on first use).
-    features: Vec<(u32, ComputePipeline)>,
-    features_spirv: &'static [u8],
-    feature_rows: u32,
+    features: FeaturePipelines,
     params: Buffer,
     view: Option<ViewGradients>,
     /// Compare-and-swap accumulation instead of float atomics.
@@ -169,9 +167,7 @@ impl Backward {
             gpu: gpu.clone(),
             blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, cols, 16 / cols, 16 / rows])?,
             project: ComputePipeline::new(gpu, "project_backward", project)?,
-            features: Vec::new(),
-            features_spirv: features,
-            feature_rows,
+            features: FeaturePipelines::new("blend_features_backward", features, feature_rows),
             params: Buffer::new(
                 gpu,
                 "backward params",
@@ -181,31 +177,6 @@ impl Backward {
             view: None,
             uses_cas: cas,
         })
-    }
-
-    /// Creates the feature backward pipelines `feature_dim` channels need. A column holds ROWS x
-    /// CHANNELS upstream gradients, so its rows are the layout's, halved until that is at most 64.
-    fn feature_pipelines(&mut self, feature_dim: u32) -> Result<()> {
-        let mut offset = 0;
-        while offset < feature_dim {
-            let channels = super::FEATURE_CHANNELS_PER_PASS.min(feature_dim - offset);
-            if !self.features.iter().any(|(c, _)| *c == channels) {
-                let mut rows = self.feature_rows;
-                while rows > 1 && rows * channels > 64 {
-                    rows /= 2;
-                }
-                let constants = [rows, 16 / rows, channels];
-                let pipeline = ComputePipeline::specialized(
-                    &self.gpu,
-                    "blend_features_backward",
-                    self.features_spirv,
-                    &constants,
-                )?;
-                self.features.push((channels, pipeline));
-            }
-            offset += channels;
-        }
-        Ok(())
     }
 
     fn reserve(&mut self, n: u32) -> Result<()> {
@@ -242,7 +213,7 @@ impl Backward {
     ) -> Result<()> {
         self.reserve(frame.num_gaussians)?;
         if upstream.features.is_some() {
-            self.feature_pipelines(frame.feature_dim)?;
+            self.features.prepare(&self.gpu, frame.feature_dim)?;
         }
         let v = self.view.as_ref().unwrap();
         let params = BackwardParams {
@@ -284,18 +255,14 @@ impl Backward {
             rec.mark("project backward");
         }
         if let (Some(_), Some(_)) = (upstream.features, grads.features.as_ref()) {
-            let mut offset = 0;
-            while offset < frame.feature_dim {
+            for (offset, channels) in FeaturePipelines::passes(frame.feature_dim) {
                 let p = FeatureBackwardPush {
                     render: push.render,
                     backward: push.backward,
                     channel_offset: offset,
                     pad: 0,
                 };
-                let channels = super::FEATURE_CHANNELS_PER_PASS.min(frame.feature_dim - offset);
-                let pipeline = &self.features.iter().find(|(c, _)| *c == channels).unwrap().1;
-                rec.dispatch(pipeline, &p, dispatch_1d(tiles));
-                offset += channels;
+                rec.dispatch(self.features.get(channels), &p, dispatch_1d(tiles));
             }
             rec.mark("features backward");
         }

@@ -4,6 +4,7 @@
 //! features (blend_features.comp). `reference` is the dense f64 CPU twin the tests check against.
 
 pub mod backward;
+mod features;
 pub mod params;
 pub mod reference;
 pub mod scan;
@@ -13,12 +14,11 @@ use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTimi
 use crate::scene::{Camera, GaussianScene};
 use crate::shaders;
 use anyhow::{bail, Result};
+use features::FeaturePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
 use sort::RadixSort;
 
 pub const TILE: u32 = 16;
-/// Channels the feature blend pass handles per dispatch.
-pub(crate) const FEATURE_CHANNELS_PER_PASS: u32 = 32;
 
 /// A scene's attributes on the GPU (structure of arrays, one buffer per attribute).
 pub struct SceneBuffers {
@@ -172,9 +172,7 @@ pub struct Rasterizer {
     emit: ComputePipeline,
     ranges: ComputePipeline,
     blend: ComputePipeline,
-    /// blend_features.comp per channel count (specialized on first use; see `feature_pipelines`).
-    blend_features: Vec<(u32, ComputePipeline)>,
-    layout: BlendLayout,
+    blend_features: FeaturePipelines,
     sort: RadixSort,
     scan: scan::PrefixScan,
     params: Buffer,
@@ -247,8 +245,7 @@ impl Rasterizer {
             emit: ComputePipeline::new(gpu, "emit_intersections", shaders::EMIT_INTERSECTIONS)?,
             ranges: ComputePipeline::new(gpu, "tile_ranges", shaders::TILE_RANGES)?,
             blend: ComputePipeline::specialized(gpu, "blend", shaders::BLEND, &[rows, 16 / rows])?,
-            blend_features: Vec::new(),
-            layout,
+            blend_features: FeaturePipelines::new("blend_features", shaders::BLEND_FEATURES, layout.forward_rows),
             sort: RadixSort::new(gpu)?,
             scan: scan::PrefixScan::new(gpu)?,
             params: Buffer::new(gpu, "render params", std::mem::size_of::<RenderParams>() as u64, MemoryKind::Upload)?,
@@ -257,28 +254,6 @@ impl Rasterizer {
             isect: None,
             image: None,
         })
-    }
-
-    /// Creates the feature blend pipelines `feature_dim` channels need, one per distinct channel
-    /// count of a pass. A column holds ROWS x CHANNELS accumulators, so its rows are the forward's,
-    /// halved until that is at most 64 floats (registers, not spilled memory, on a CPU driver).
-    fn feature_pipelines(&mut self, feature_dim: u32) -> Result<()> {
-        let mut offset = 0;
-        while offset < feature_dim {
-            let channels = FEATURE_CHANNELS_PER_PASS.min(feature_dim - offset);
-            if !self.blend_features.iter().any(|(c, _)| *c == channels) {
-                let mut rows = self.layout.forward_rows;
-                while rows > 1 && rows * channels > 64 {
-                    rows /= 2;
-                }
-                let constants = [rows, 16 / rows, channels];
-                let pipeline =
-                    ComputePipeline::specialized(&self.gpu, "blend_features", shaders::BLEND_FEATURES, &constants)?;
-                self.blend_features.push((channels, pipeline));
-            }
-            offset += channels;
-        }
-        Ok(())
     }
 
     fn reserve_gaussians(&mut self, n: u32) -> Result<()> {
@@ -376,7 +351,7 @@ impl Rasterizer {
         }
         self.reserve_gaussians(n)?;
         self.reserve_image(width, height, feature_dim)?;
-        self.feature_pipelines(feature_dim)?;
+        self.blend_features.prepare(&self.gpu, feature_dim)?;
         let tiles_x = width.div_ceil(TILE);
         let tiles_y = height.div_ceil(TILE);
         let num_tiles = tiles_x * tiles_y;
@@ -437,16 +412,9 @@ impl Rasterizer {
         }
         rec.dispatch(&self.blend, &push, dispatch_1d(num_tiles));
         rec.mark_moved("blend", moved::blend(m, width * height, num_tiles));
-        let mut offset = 0;
-        while offset < feature_dim {
-            let channels = FEATURE_CHANNELS_PER_PASS.min(feature_dim - offset);
-            let pipeline = &self.blend_features.iter().find(|(c, _)| *c == channels).unwrap().1;
-            rec.dispatch(
-                pipeline,
-                &ParamsPushU32 { params: push.params, value: offset, pad: 0 },
-                dispatch_1d(num_tiles),
-            );
-            offset += channels;
+        for (offset, channels) in FeaturePipelines::passes(feature_dim) {
+            let push = ParamsPushU32 { params: push.params, value: offset, pad: 0 };
+            rec.dispatch(self.blend_features.get(channels), &push, dispatch_1d(num_tiles));
         }
         if feature_dim > 0 {
             rec.mark("blend features");
