@@ -337,6 +337,20 @@ impl Rasterizer {
     /// Runs the forward passes and leaves every output and the per-pixel state on the GPU (see
     /// `outputs`), ready for a loss and the backward passes.
     pub fn forward(&mut self, scene: &SceneBuffers, camera: &Camera, settings: &RenderSettings) -> Result<Frame> {
+        let (mut frame, rec) = self.forward_open(scene, camera, settings)?;
+        frame.timings.extend(rec.submit_and_wait()?);
+        Ok(frame)
+    }
+
+    /// As `forward`, but the second submission (tile passes and blends) is returned unsubmitted, so
+    /// that a caller records what follows (a training iteration's loss, backward and Adam) into it
+    /// and pays one submission and wait for both. The outputs exist once it has been submitted.
+    pub fn forward_open(
+        &mut self,
+        scene: &SceneBuffers,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<(Frame, Recorder)> {
         let (width, height) = (camera.width, camera.height);
         if width == 0 || height == 0 {
             bail!("camera {:?} has an empty image size", camera.name);
@@ -375,7 +389,7 @@ impl Rasterizer {
         self.scan.record(&mut rec, &frame.isect_offsets, n + 1);
         rec.copy_region(&frame.isect_offsets, n as u64 * 4, &self.intersection_count, 0, 4);
         rec.mark("tile count scan");
-        let mut timings = rec.submit_and_wait()?;
+        let timings = rec.submit_and_wait()?;
         // the one readback a frame needs: the intersection count sizes the buffers and dispatches of
         // the second submission
         let m = self.intersection_count.download::<u32>(&self.gpu, 1)?[0];
@@ -419,8 +433,7 @@ impl Rasterizer {
         if feature_dim > 0 {
             rec.mark("blend features");
         }
-        timings.extend(rec.submit_and_wait()?);
-        Ok(Frame { params, num_intersections: m, timings })
+        Ok((Frame { params, num_intersections: m, timings }, rec))
     }
 
     /// Reads a frame's outputs back to the host.

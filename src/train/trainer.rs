@@ -266,9 +266,10 @@ impl Trainer {
             timestamps: self.profile,
             ..Default::default()
         };
-        let frame = self.raster.forward(&self.scene, &view.camera, &settings)?;
+        // the forward's second submission stays open: loss, backward and Adam follow in it, so an
+        // iteration is two submissions (the first ends at the one readback, the intersection count)
+        let (frame, mut rec) = self.raster.forward_open(&self.scene, &view.camera, &settings)?;
         let outputs = self.raster.outputs().unwrap();
-        let mut rec = Recorder::with_timestamps(&self.gpu, self.profile)?;
         self.grads.record_zero_parameters(&mut rec);
         let inputs = LossInputs {
             render: outputs.rgb,
