@@ -1,6 +1,6 @@
-// Backward of blend.comp. One 16x16 workgroup per tile (each of its subgroups on its own) walks the tile's intersections back to front,
-// recovering each contributor's transmittance from the final one (T_i = T_{i+1} / (1 - alpha_i)) and the
-// sums of what lies behind it, so
+// Backward of blend.comp. One 16x16 workgroup per tile (each of its subgroups on its own) walks the
+// tile's intersections back to front, recovering each contributor's transmittance from the final one
+// (T_i = T_{i+1} / (1 - alpha_i)) and the sums of what lies behind it, so
 //   dC/dalpha_i = T_i c_i - (sum_{j>i} w_j c_j + T_final bg) / (1 - alpha_i)
 // and likewise for alpha (1 - T_final), accumulated depth and the weight sum behind expected depth.
 // Each invocation owns ROWS x COLS pixels of the tile (the workgroup is 16/COLS x 16/ROWS), so a
