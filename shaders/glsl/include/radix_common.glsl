@@ -3,8 +3,8 @@
 // device's subgroup size: 8 on lavapipe, 32 on NVIDIA), which walks the block in order, one row of
 // consecutive keys per step (contiguous loads on a GPU, one SIMD row on a CPU driver). The keys of a
 // row that share a digit find each other with ballots (match_digit); the last of them bumps the
-// block's running digit offsets, so ranking needs no atomics, no per-subgroup histograms to clear and combine, and no
-// rank storage between phases. No workgroup waits on another (no forward-progress assumption).
+// block's running digit offsets, so ranking needs no atomics, no per-subgroup histograms to clear and
+// combine, and no rank storage between phases. No workgroup waits on another (no forward-progress assumption).
 // Stable: rows in order, lanes in order, blocks in order.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
