@@ -3,13 +3,17 @@
 //!
 //!   cargo bench --bench sort [-- --sizes 1000000,4000000,16000000 --runs 3]
 //!
+//! The roofline: the bytes the sort must move (render::sort::bytes_moved) over the device's compute
+//! copy bandwidth is the fastest any sort with these passes could run here; the table shows the
+//! sort's share of that and the ratio to `sort_unstable` a sort at the roof would reach.
+//!
 //! Prints a table and writes bench/results/sort-<device>.json.
 
 #[path = "common.rs"]
 mod common;
 
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
-use cogeo::render::sort::RadixSort;
+use cogeo::render::sort::{bytes_moved, RadixSort};
 use cogeo::rng::Rng;
 use std::time::Instant;
 
@@ -19,6 +23,7 @@ fn main() {
     let runs: usize = common::arg(&args, "--runs").map(|f| f.parse().unwrap()).unwrap_or(3);
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());
+    let roof = common::copy_bandwidth(&gpu);
     let mut sort = RadixSort::new(&gpu).unwrap();
     let mut rows = Vec::new();
     for &n in &sizes {
@@ -56,25 +61,43 @@ fn main() {
         }
         let g = common::median(gpu_ms);
         let c = common::median(cpu_ms);
+        let mb = bytes_moved(n as u64, 32) as f64 / 1e6;
+        let share = mb / g / roof.roof_gbps(); // MB per ms is GB/s
+        let roof_ms = mb / roof.roof_gbps();
         println!(
             "{n:>10} pairs: GPU radix {g:>9.2} ms ({:>7.1} Mkeys/s), sort_unstable {c:>9.2} ms ({:>7.1} Mkeys/s), sort_unstable/GPU {:.2}x",
             n as f64 / g / 1e3,
             n as f64 / c / 1e3,
             c / g
         );
-        rows.push(serde_json::json!({"pairs": n, "gpu_ms": g, "sort_unstable_ms": c, "speedup": c / g}));
-    }
-    println!("\n| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU |");
-    println!("|---:|---:|---:|---:|");
-    for r in &rows {
         println!(
-            "| {} | {:.1} | {:.1} | {:.2}x |",
+            "{:>10}        moves {mb:.1} MB: {:.1} % of the copy roof; at the roof {roof_ms:.2} ms, sort_unstable/roof {:.2}x",
+            "",
+            100.0 * share,
+            c / roof_ms
+        );
+        rows.push(serde_json::json!({"pairs": n, "gpu_ms": g, "sort_unstable_ms": c, "speedup": c / g,
+                                     "mb_moved": mb, "share_of_copy": share, "roof_ms": roof_ms,
+                                     "speedup_at_roof": c / roof_ms}));
+    }
+    println!("\n| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU | MB moved | % of copy roof | sort_unstable / (sort at the roof) |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|");
+    for r in &rows {
+        let f = |k: &str| r[k].as_f64().unwrap();
+        println!(
+            "| {} | {:.1} | {:.1} | {:.2}x | {:.1} | {:.1} | {:.2}x |",
             r["pairs"],
-            r["gpu_ms"].as_f64().unwrap(),
-            r["sort_unstable_ms"].as_f64().unwrap(),
-            r["speedup"].as_f64().unwrap()
+            f("gpu_ms"),
+            f("sort_unstable_ms"),
+            f("speedup"),
+            f("mb_moved"),
+            100.0 * f("share_of_copy"),
+            f("speedup_at_roof")
         );
     }
     let path = common::results_path(&format!("sort-{}.json", common::device_slug(&gpu)));
-    common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "runs": runs, "rows": rows }));
+    common::write_json(
+        &path,
+        &serde_json::json!({ "device": gpu.info().summary(), "copy_bandwidth": roof, "runs": runs, "rows": rows }),
+    );
 }

@@ -43,6 +43,15 @@ pub fn passes_for_bits(bits: u32) -> u32 {
     bits.div_ceil(RADIX_BITS)
 }
 
+/// Bytes a sort of `n` pairs by `bits` key bits must move: per pass, the count reads the keys, the
+/// histogram scan reads and writes the block histograms, the scatter reads them and the pairs and
+/// writes the pairs. The roofline of `cargo bench --bench sort` divides by this.
+pub fn bytes_moved(n: u64, bits: u32) -> u64 {
+    let histogram = n.div_ceil(BLOCK_KEYS as u64) * RADIX as u64 * 4;
+    let per_pass = 4 * n + 2 * histogram + (histogram + 16 * n);
+    passes_for_bits(bits) as u64 * per_pass
+}
+
 impl RadixSort {
     /// The sort for this device; its workgroups are one subgroup of the device's size.
     pub fn new(gpu: &Gpu) -> Result<RadixSort> {
