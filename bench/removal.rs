@@ -66,7 +66,14 @@ fn main() {
     if repeat_full {
         variants.insert(1, ("cogeo (full, second run)", "vote", &[]));
     }
-    let lpips = common::arg(&args, "--lpips-model");
+    // the real LPIPS network beside the project when no other is named (../shared/models)
+    let shared_lpips = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models/lpips_alex_v0.1.onnx");
+    let lpips = common::arg(&args, "--lpips-model")
+        .or_else(|| shared_lpips.exists().then(|| shared_lpips.to_string_lossy().into_owned()));
+    match &lpips {
+        Some(m) => eprintln!("LPIPS network: {m}"),
+        None => eprintln!("no LPIPS network (--lpips-model): LPIPS columns read n/a"),
+    }
     let fid = common::arg(&args, "--fid-model");
     let root = std::env::temp_dir().join(format!("cogeo_bench_removal_{}", std::process::id()));
     let p = |x: &Path| x.to_string_lossy().into_owned();
@@ -208,27 +215,31 @@ fn main() {
          silhouettes' bounding box (bbox), on the never-seen part of the mask; leftover = share of mask pixels that \
          still look like the object; floaters = opacity-weighted count of Gaussians off the true surface by more than \
          5 % in every view of the mask; time = the whole `cogeo remove` run; memory = its peak resident set.\n\n\
-         | scene | variant | masked PSNR | masked SSIM | bbox PSNR | never-seen PSNR | leftover | floaters | LPIPS (bbox) | time s | peak MiB |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+         | scene | variant | masked PSNR | masked SSIM | masked LPIPS | seen-elsewhere PSNR | seen-elsewhere LPIPS | never-seen PSNR | never-seen LPIPS | outside PSNR | bbox PSNR | leftover | floaters | time s | peak MiB |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     );
     for r in &rows {
         let m = &r["metrics"];
         md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r["scene"].as_str().unwrap(),
             r["variant"].as_str().unwrap(),
             num(&m["mask"]["psnr"], 2),
             num(&m["mask"]["ssim"], 3),
-            num(&m["bbox"]["psnr"], 2),
+            num(&m["lpips"]["mask"], 3),
+            num(&m["seen_elsewhere"]["psnr"], 2),
+            num(&m["lpips"]["seen_elsewhere"], 3),
             num(&m["never_seen"]["psnr"], 2),
+            num(&m["lpips"]["never_seen"], 3),
+            num(&m["outside"]["psnr"], 2),
+            num(&m["bbox"]["psnr"], 2),
             num(&m["leftover"], 3),
             num(&m["floaters"]["score"], 1),
-            num(&m["lpips"]["bbox"], 3),
             num(&r["total_seconds"], 1),
             num(&r["peak_rss_mib"], 0),
         );
     }
-    md += "\nMean over the scenes:\n\n| variant | masked PSNR | masked SSIM | bbox PSNR |\n|---|---:|---:|---:|\n";
+    md += "\nMean over the scenes:\n\n| variant | masked PSNR | masked SSIM | masked LPIPS | seen-elsewhere PSNR | never-seen PSNR | never-seen LPIPS | bbox PSNR |\n|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (variant, _, _) in variants.iter() {
         let sel: Vec<&Value> = rows.iter().filter(|r| r["variant"] == *variant).collect();
         let mean = |f: &dyn Fn(&Value) -> Option<f64>| {
@@ -240,9 +251,13 @@ fn main() {
             }
         };
         md += &format!(
-            "| {variant} | {} | {} | {} |\n",
+            "| {variant} | {} | {} | {} | {} | {} | {} | {} |\n",
             num(&mean(&|m| m["mask"]["psnr"].as_f64()), 2),
             num(&mean(&|m| m["mask"]["ssim"].as_f64()), 3),
+            num(&mean(&|m| m["lpips"]["mask"].as_f64()), 3),
+            num(&mean(&|m| m["seen_elsewhere"]["psnr"].as_f64()), 2),
+            num(&mean(&|m| m["never_seen"]["psnr"].as_f64()), 2),
+            num(&mean(&|m| m["lpips"]["never_seen"].as_f64()), 3),
             num(&mean(&|m| m["bbox"]["psnr"].as_f64()), 2)
         );
     }

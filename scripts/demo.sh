@@ -7,4 +7,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 bash scripts/setup.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
-cargo run --release --quiet -- demo "$@"
+# the real LPIPS network, when the shared models are beside the project, scores the fill
+extra=()
+lpips="$root/../shared/models/lpips_alex_v0.1.onnx"
+if [ -f "$lpips" ]; then extra=(--lpips-model "$lpips"); fi
+cargo run --release --quiet -- demo "${extra[@]}" "$@"

@@ -218,8 +218,14 @@ fn eval_cli_on_a_synth_dataset() {
             "bbox",
             "--lpips-model",
             &lpips.to_string_lossy(),
+            "--lpips-min-side",
+            "16",
             "--fid-model",
             &fid.to_string_lossy(),
+            "--fid-scale",
+            "1",
+            "--fid-offset",
+            "0",
         ],
     );
     assert_eq!(m["leftover"].as_f64().unwrap(), 1.0, "every informative object pixel is left over");
@@ -389,4 +395,65 @@ fn synth_writes_the_ground_truth_of_removing_a_subset() {
     }
     assert!(kept > 0 && changed > 0, "kept {kept}, changed {changed}");
     std::fs::remove_dir_all(&root).ok();
+}
+
+/// The real LPIPS network (AlexNet, v0.1) as published, fed by names read from the model: identical
+/// images are at distance 0, a blurred copy of a photo is clearly farther, and the masked variant
+/// only sees the pixels inside the mask.
+#[test]
+fn real_lpips_network_scores_a_blurred_photo() {
+    let model = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/models/lpips_alex_v0.1.onnx");
+    let Some(photo) = common::shared_data("statue/images_2/IMG_2707.png") else {
+        eprintln!("shared/data/statue not present; skipping");
+        return;
+    };
+    if !model.exists() {
+        eprintln!("shared/models/lpips_alex_v0.1.onnx not present; skipping");
+        return;
+    }
+    use cogeo::eval::models::{Lpips, NetworkInput};
+    let mut lpips = Lpips::load(&model, NetworkInput::lpips_default(), 32).unwrap();
+    let img = image::open(&photo).unwrap().resize_exact(128, 96, image::imageops::FilterType::Triangle).to_rgb8();
+    let (w, h) = (128usize, 96usize);
+    let planar: Vec<f32> = (0..3).flat_map(|c| img.pixels().map(move |p| p[c] as f32 / 255.0)).collect();
+    // separable Gaussian blur, sigma 2, clamped edges
+    let k: Vec<f32> = (-6..=6).map(|i: i32| (-(i * i) as f32 / 8.0).exp()).collect();
+    let ks: f32 = k.iter().sum();
+    let blur_1d = |src: &[f32], dx: usize, dy: usize| -> Vec<f32> {
+        let mut out = vec![0f32; src.len()];
+        for c in 0..3 {
+            for y in 0..h {
+                for x in 0..w {
+                    let mut acc = 0f32;
+                    for (j, kv) in k.iter().enumerate() {
+                        let o = j as i64 - 6;
+                        let sx = (x as i64 + o * dx as i64).clamp(0, w as i64 - 1) as usize;
+                        let sy = (y as i64 + o * dy as i64).clamp(0, h as i64 - 1) as usize;
+                        acc += kv * src[c * w * h + sy * w + sx];
+                    }
+                    out[c * w * h + y * w + x] = acc / ks;
+                }
+            }
+        }
+        out
+    };
+    let blurred = blur_1d(&blur_1d(&planar, 1, 0), 0, 1);
+    let same = lpips.distance(&planar, &planar, w, h).unwrap();
+    let blur = lpips.distance(&blurred, &planar, w, h).unwrap();
+    eprintln!("LPIPS: d(x, x) = {same}, d(blur(x), x) = {blur}");
+    assert!(same.abs() < 1e-6, "d(x, x) = {same}");
+    assert!(blur > 0.05, "d(blur(x), x) = {blur}");
+    // masked: a box-shaped hole; the blurred copy pasted inside it only
+    let mask: Vec<bool> = (0..w * h).map(|i| (40..80).contains(&(i % w)) && (30..70).contains(&(i / w))).collect();
+    let masked = lpips.masked(&blurred, &planar, &mask, w, h).unwrap().unwrap();
+    let bbox = lpips.bbox(&blurred, &planar, &mask, w, h).unwrap().unwrap();
+    assert!(masked > 0.05, "masked LPIPS of a blurred hole {masked}");
+    assert!((masked - bbox).abs() < 1e-6, "a box-shaped mask is its own bounding box: {masked} vs {bbox}");
+    let elsewhere = lpips.masked(&planar, &planar, &mask, w, h).unwrap().unwrap();
+    assert!(elsewhere.abs() < 1e-6, "a hole filled with the truth scores {elsewhere}");
+    // a small mask is scored on a crop grown to the network's 32-pixel minimum, still inside the image
+    let dot: Vec<bool> = (0..w * h).map(|i| i % w >= 120 && i / w >= 90).collect();
+    let r = lpips.region_box(&dot, w, h).unwrap();
+    assert_eq!((r.x0, r.x1, r.y0, r.y1), (96, 128, 64, 96));
+    assert!(lpips.masked(&blurred, &planar, &dot, w, h).unwrap().unwrap() > 0.0);
 }

@@ -26,6 +26,10 @@ pub struct DemoArgs {
     /// Scene seed (object placement and textures).
     #[arg(long, default_value_t = 2)]
     pub seed: u64,
+    /// LPIPS and FID networks for the report (see `cogeo eval --help`); scripts/demo.sh passes the
+    /// shared LPIPS network when it is there.
+    #[command(flatten)]
+    pub models: super::eval::MetricModels,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -151,8 +155,11 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
             scene: Some(out.join(dir).join("scene.ply")),
             tau: 0.05,
             leftover_margin: 0.05,
-            lpips: None,
-            fid: None,
+            lpips: a.models.lpips_model.clone(),
+            lpips_input: a.models.lpips_input(),
+            lpips_min_side: a.models.lpips_min_side,
+            fid: a.models.fid_model.clone(),
+            fid_input: a.models.fid_input(),
         })
     };
     let (ours, only) = (eval("removal")?, eval("removal_only")?);
@@ -218,11 +225,13 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
     let f3 = |v: &serde_json::Value| v.as_f64().map(|x| format!("{x:.3}")).unwrap_or_else(|| "n/a".into());
     let row = |name: &str, m: &serde_json::Value| {
         format!(
-            "| {name} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {name} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             f(&m["mask"]["psnr"]),
             f3(&m["mask"]["ssim"]),
+            f3(&m["lpips"]["mask"]),
             f(&m["bbox"]["psnr"]),
             f(&m["full"]["psnr"]),
+            f(&m["seen_elsewhere"]["psnr"]),
             f(&m["never_seen"]["psnr"]),
             f3(&m["leftover"]),
             f(&m["floaters"]["score"]),
@@ -234,8 +243,8 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
          Total {total:.0} s.\n\n\
          Held-out views against the exact object-free ground truth (the scene ray-cast without the\n\
          objects), inside the removed objects' silhouettes:\n\n\
-         | method | masked PSNR | masked SSIM | bbox PSNR | full PSNR | never-seen PSNR | leftover | floaters |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|\n",
+         | method | masked PSNR | masked SSIM | masked LPIPS | bbox PSNR | full PSNR | seen-elsewhere PSNR | never-seen PSNR | leftover | floaters |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
         ours["views"].as_array().map_or(0, |v| v.len()),
         removal_report["device"].as_str().unwrap_or("?"),
     );

@@ -1,7 +1,7 @@
 //! `cogeo eval`: scores a folder of renders against a folder of ground-truth images inside masks,
 //! with the synth-only extras when the `cogeo synth` dataset is given.
 
-use super::models::{FidFeatures, Lpips};
+use super::models::{FidFeatures, Lpips, NetworkInput};
 use super::{bbox_scores, floater_score, frechet_distance, full_scores, leftover_fraction, mask_scores, Scores};
 use crate::train::dataset::{find_image, load_rgb};
 use anyhow::{anyhow, bail, Context, Result};
@@ -40,7 +40,11 @@ pub struct EvalConfig {
     /// Leftover score: RGB distance margin.
     pub leftover_margin: f32,
     pub lpips: Option<PathBuf>,
+    pub lpips_input: NetworkInput,
+    /// The LPIPS network's smallest accepted side (images are upsampled, crops grown to it).
+    pub lpips_min_side: usize,
     pub fid: Option<PathBuf>,
+    pub fid_input: NetworkInput,
 }
 
 fn load_mask(path: &Path, labels: &[u8], w: u32, h: u32) -> Result<Vec<bool>> {
@@ -101,8 +105,9 @@ fn not_computed(why: &str) -> Value {
 
 /// Runs the evaluation; returns the metrics JSON.
 pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
-    let mut lpips = cfg.lpips.as_deref().map(Lpips::load).transpose()?;
-    let mut fid = cfg.fid.as_deref().map(FidFeatures::load).transpose()?;
+    let mut lpips =
+        cfg.lpips.as_deref().map(|p| Lpips::load(p, cfg.lpips_input.clone(), cfg.lpips_min_side)).transpose()?;
+    let mut fid = cfg.fid.as_deref().map(|p| FidFeatures::load(p, cfg.fid_input.clone())).transpose()?;
     let stems = image_stems(&cfg.renders)?;
     // the synth ground truth of removing exactly the masked objects (all of them without --labels)
     let truth = cfg.data.as_ref().map(|d| {
@@ -111,7 +116,11 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
     });
     let mut views = Vec::new();
     let (mut m_mask, mut m_bbox, mut m_full, mut m_unseen, mut m_seen) = (vec![], vec![], vec![], vec![], vec![]);
-    let (mut leftovers, mut lp_bbox, mut lp_full) = (vec![], vec![], vec![]);
+    let mut m_outside = vec![];
+    let mut leftovers = vec![];
+    // LPIPS per region: full, bbox, mask, never seen, seen elsewhere
+    let mut lp: [Vec<f64>; 5] = Default::default();
+    const LP_REGIONS: [&str; 5] = ["full", "bbox", "mask", "never_seen", "seen_elsewhere"];
     let (mut feat_r, mut feat_g) = (vec![], vec![]);
     let (mut d_rel, mut d_sq, mut d_n) = (0f64, 0f64, 0usize);
     for stem in &stems {
@@ -129,7 +138,11 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
             bbox_scores(&render, &gt, &mask, wu, hu),
             full_scores(&render, &gt, wu, hu),
         );
-        let mut view = json!({ "name": stem, "mask_pixels": mask.iter().filter(|&&m| m).count(), "mask": sm, "bbox": sb, "full": sf });
+        let mut subsets: Option<(Vec<bool>, Vec<bool>)> = None;
+        let outside: Vec<bool> = mask.iter().map(|&m| !m).collect();
+        let so = mask_scores(&render, &gt, &outside, wu, hu);
+        let mut view = json!({ "name": stem, "mask_pixels": mask.iter().filter(|&&m| m).count(), "mask": sm, "bbox": sb, "full": sf, "outside": so });
+        m_outside.push(so);
         m_mask.push(sm);
         m_bbox.push(sb);
         m_full.push(sf);
@@ -143,6 +156,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
             view["seen_elsewhere"] = json!(se);
             m_unseen.push(su);
             m_seen.push(se);
+            subsets = Some((inside, elsewhere));
             let ipath = find_image(&data.join("images"), stem)
                 .ok_or_else(|| anyhow!("{}: no image {stem} (with the objects)", data.join("images").display()))?;
             let with_objects = load_same_size(&ipath, w, h, "image")?;
@@ -166,14 +180,22 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
             }
         }
         if let Some(l) = &mut lpips {
-            let d = l.distance(&render, &gt, wu, hu)?;
-            view["lpips_full"] = json!(d);
-            lp_full.push(d);
-            if let Some(r) = crate::image_ops::bounding_box(&mask, wu) {
-                use crate::image_ops::crop;
-                let b = l.distance(&crop(&render, wu, hu, 3, r), &crop(&gt, wu, hu, 3, r), r.width(), r.height())?;
-                view["lpips_bbox"] = json!(b);
-                lp_bbox.push(b);
+            let mut values = [
+                Some(l.distance(&render, &gt, wu, hu)?),
+                l.bbox(&render, &gt, &mask, wu, hu)?,
+                l.masked(&render, &gt, &mask, wu, hu)?,
+                None,
+                None,
+            ];
+            if let Some((never, elsewhere)) = &subsets {
+                values[3] = l.masked(&render, &gt, never, wu, hu)?;
+                values[4] = l.masked(&render, &gt, elsewhere, wu, hu)?;
+            }
+            for (k, v) in values.iter().enumerate() {
+                if let Some(v) = v {
+                    view[format!("lpips_{}", LP_REGIONS[k])] = json!(v);
+                    lp[k].push(*v);
+                }
             }
         }
         if let Some(f) = &mut fid {
@@ -199,6 +221,8 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         "mask": mean_scores(&m_mask),
         "bbox": mean_scores(&m_bbox),
         "full": mean_scores(&m_full),
+        // the scene's own quality: every pixel outside the mask, which the removal must not change
+        "outside": mean_scores(&m_outside),
         "never_seen": if cfg.data.is_some() { mean_scores(&m_unseen) } else { not_computed(no_data) },
         "seen_elsewhere": if cfg.data.is_some() { mean_scores(&m_seen) } else { not_computed(no_data) },
         "leftover": if cfg.data.is_some() { json!(mean_of(leftovers.into_iter())) } else { not_computed(no_data) },
@@ -232,7 +256,17 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         _ => not_computed("needs --data and --scene"),
     };
     out["lpips"] = if lpips.is_some() {
-        json!({ "bbox": mean_of(lp_bbox.into_iter()), "full": mean_of(lp_full.into_iter()), "model": cfg.lpips })
+        let mut v =
+            json!({ "model": cfg.lpips, "input_scale": cfg.lpips_input.scale, "input_offset": cfg.lpips_input.offset });
+        for (k, values) in lp.iter().enumerate() {
+            let subset = k >= 3;
+            v[LP_REGIONS[k]] = if subset && cfg.data.is_none() {
+                not_computed(no_data)
+            } else {
+                json!(mean_of(values.iter().copied()))
+            };
+        }
+        v
     } else {
         not_computed("no --lpips-model given")
     };
