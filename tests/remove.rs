@@ -87,6 +87,59 @@ fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("label(s) [7]"));
 
+    // bring-your-own inpainting: the exact object-free views as a perfect inpainter's output are
+    // used exactly inside the holes, the render elsewhere, and beat the built-in fill
+    let truth = cogeo::synth::ground_truth(std::path::Path::new(&data), &[1, 2]);
+    let truth_dir = truth.images.to_string_lossy().into_owned();
+    let quick = ["--no-transfer", "--no-refine"];
+    let own = remove("own_inpainting", &[&["--inpainted", &truth_dir][..], &quick].concat());
+    let builtin = remove("builtin_inpainting", &quick);
+    assert!(own["completion"]["inpainter"].as_str().unwrap().contains(&truth_dir));
+    let (po, pb) = (masked_psnr(&own), masked_psnr(&builtin));
+    eprintln!("--inpainted with the true background: held-out masked PSNR {po:.2} dB, built-in {pb:.2} dB");
+    assert!(po > pb + 0.5, "provided inpainting {po:.2} dB vs built-in {pb:.2} dB");
+    let mut filled = 0;
+    for entry in std::fs::read_dir(root.join("own_inpainting/inpainted")).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        let load = |dir: std::path::PathBuf| image::open(dir.join(&name)).unwrap().to_rgb8();
+        let (mine, theirs, render) = (
+            load(root.join("own_inpainting/inpainted")),
+            load(truth.images.clone()),
+            load(root.join("builtin_inpainting/removed")),
+        );
+        let mask = image::open(root.join("own_inpainting/mask").join(&name)).unwrap().to_luma8();
+        for (i, m) in mask.pixels().enumerate() {
+            let (x, y) = (i as u32 % mask.width(), i as u32 / mask.width());
+            if m[0] == 255 {
+                assert_eq!(mine.get_pixel(x, y), theirs.get_pixel(x, y), "{name} ({x}, {y}) inside the hole");
+                filled += 1;
+            } else {
+                assert_eq!(mine.get_pixel(x, y), render.get_pixel(x, y), "{name} ({x}, {y}) outside the hole");
+            }
+        }
+    }
+    assert!(filled > 0);
+    // a missing view is an error naming the folder and the view
+    let partial = root.join("partial");
+    std::fs::create_dir_all(&partial).unwrap();
+    // every view but the first edited one
+    let mut edited: Vec<_> =
+        std::fs::read_dir(root.join("own_inpainting/inpainted")).unwrap().map(|e| e.unwrap().file_name()).collect();
+    edited.sort();
+    for e in std::fs::read_dir(&truth.images).unwrap() {
+        let p = e.unwrap().path();
+        if p.file_name().unwrap() != edited[0] {
+            std::fs::copy(&p, partial.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    let out = std::process::Command::new(exe)
+        .args(["remove", "--scene", &tagged, "--data", &data, "--labels", "1,2", "--out", &path("partial_out")])
+        .args(["--inpainted", &partial.to_string_lossy()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("partial") && err.contains("no inpainted view for image"), "{err}");
+
     // every ONNX path through the CLI (tiny models; no refinement to keep it short)
     let models = root.join("models");
     let lama = onnx::write(&models, "lama.onnx", &onnx::tiny_lama());

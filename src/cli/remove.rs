@@ -20,8 +20,15 @@ pub struct RemovalFlags {
     pub prompt: Vec<String>,
     /// ONNX inpainting model with the LaMa contract (image [1,3,512,512] in [0,1] and mask
     /// [1,1,512,512], 1 = hole, in; RGB out). Default: the built-in harmonic inpainter.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "inpainted")]
     pub inpaint_model: Option<PathBuf>,
+    /// Bring your own inpainting: a folder of inpainted training views named like the images (the
+    /// output of LaMa, Stable Diffusion, an image editor, ...), used as the RGB completion of those
+    /// views exactly inside the holes; depth, color transfer, fusion and refinement run unchanged.
+    /// Inpaint at least the removed objects' masks, dilated a few pixels (a previous run's `mask/`
+    /// shows the region cogeo fills). Views of another size are resized.
+    #[arg(long)]
+    pub inpainted: Option<PathBuf>,
     /// ONNX monocular depth model (see --depth-contract). Default: the built-in prior (harmonic
     /// completion of the rendered inverse depth from the hole boundary).
     #[arg(long)]
@@ -172,9 +179,14 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     let data = cogeo::train::dataset::load(&a.data, &a.images, a.scale.downscale)?;
     // load models before any GPU work so a bad model path fails at once
     let mut completer = Completer {
-        inpainter: match &f.inpaint_model {
-            Some(p) => Inpainter::onnx(p)?,
-            None => Inpainter::BuiltIn,
+        inpainter: match (&f.inpaint_model, &f.inpainted) {
+            (Some(p), _) => Inpainter::onnx(p)?,
+            (None, Some(dir)) => {
+                let names: Vec<String> = data.train.iter().map(|v| v.camera.name.clone()).collect();
+                let sizes: Vec<(u32, u32)> = data.train.iter().map(|v| (v.camera.width, v.camera.height)).collect();
+                Inpainter::provided(dir, &names, &sizes)?
+            }
+            (None, None) => Inpainter::BuiltIn,
         },
         prior: match &f.depth_model {
             Some(p) => DepthPrior::onnx(p, f.depth_contract)?,

@@ -8,6 +8,9 @@
 //!   RGB in [0, 1]. The hole's bounding box, grown by half its size (and at least 16 pixels) for
 //!   context, is cropped, resized to 512 x 512, inpainted, resized back, and only the hole pixels are
 //!   pasted into the view.
+//! - `Inpainter::Provided` takes the user's own inpainted views (`cogeo remove --inpainted DIR`:
+//!   LaMa, Stable Diffusion, an image editor, ...), one per edited view in view order, already at
+//!   the view's size: their pixels are used exactly inside the hole, the render everywhere else.
 
 use super::harmonic::harmonic_fill;
 use crate::image_ops::{bounding_box, crop, resize_bilinear, Rect};
@@ -21,6 +24,11 @@ pub const LAMA_SIZE: usize = 512;
 pub enum Inpainter {
     BuiltIn,
     Onnx(Box<Model>),
+    /// Planar RGB per edited view, from `dir`.
+    Provided {
+        dir: std::path::PathBuf,
+        views: Vec<Vec<f32>>,
+    },
 }
 
 impl Inpainter {
@@ -35,7 +43,44 @@ impl Inpainter {
         match self {
             Inpainter::BuiltIn => "built-in harmonic".into(),
             Inpainter::Onnx(m) => format!("onnx {}", m.path().display()),
+            Inpainter::Provided { dir, .. } => format!("inpainted views from {}", dir.display()),
         }
+    }
+
+    /// The user's inpainted views of `dir` for the views named `names` (sizes `sizes`), found by
+    /// name like the images (PNG or JPEG); a view of another size is resized bilinearly. Errors
+    /// name the folder and the missing view.
+    pub fn provided(dir: &Path, names: &[String], sizes: &[(u32, u32)]) -> Result<Inpainter> {
+        use crate::train::dataset::{find_image, load_rgb};
+        if !dir.is_dir() {
+            bail!("{}: --inpainted is not a folder", dir.display());
+        }
+        let mut views = Vec::with_capacity(names.len());
+        for (name, &(w, h)) in names.iter().zip(sizes) {
+            let path = find_image(dir, name).ok_or_else(|| {
+                anyhow::anyhow!("{}: no inpainted view for image {name} (PNG or JPEG)", dir.display())
+            })?;
+            let (iw, ih, rgb) = load_rgb(&path)?;
+            views.push(if (iw, ih) == (w, h) {
+                rgb
+            } else {
+                eprintln!("{}: {iw}x{ih}, resized to the view's {w}x{h}", path.display());
+                resize_bilinear(&rgb, iw as usize, ih as usize, 3, w as usize, h as usize)
+            });
+        }
+        Ok(Inpainter::Provided { dir: dir.to_path_buf(), views })
+    }
+
+    /// As `inpaint`, for edited view `index` (the provided views are per view).
+    pub fn inpaint_view(&mut self, index: usize, image: &[f32], hole: &[bool], w: usize, h: usize) -> Result<Vec<f32>> {
+        if let Inpainter::Provided { views, dir } = self {
+            let Some(view) = views.get(index).filter(|v| v.len() == 3 * w * h) else {
+                bail!("{}: no inpainted view {index} of size {w}x{h}", dir.display());
+            };
+            let n = w * h;
+            return Ok((0..3 * n).map(|i| if hole[i % n] { view[i] } else { image[i] }).collect());
+        }
+        self.inpaint(image, hole, w, h)
     }
 
     /// Fills the `hole` pixels of the planar RGB `image` (w x h); pixels outside the hole are
@@ -53,6 +98,9 @@ impl Inpainter {
                 Ok(harmonic_fill(image, &known, w, h, 3))
             }
             Inpainter::Onnx(model) => lama(model, image, hole, w, h, bbox),
+            Inpainter::Provided { dir, .. } => {
+                bail!("{}: provided inpaintings are per view (inpaint_view)", dir.display())
+            }
         }
     }
 }

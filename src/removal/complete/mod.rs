@@ -115,7 +115,7 @@ impl Completer {
                     }
                 }
                 let rest: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !t.found[p]).collect();
-                c.rgb = self.inpaint_again(&image, &rest, &c.surfaces, w, h)?;
+                c.rgb = self.inpaint_again(i, &image, &rest, &c.surfaces, w, h)?;
             }
             counts.push(n);
         }
@@ -124,7 +124,7 @@ impl Completer {
 
     pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {
         let (w, h) = (v.width, v.height);
-        let rgb = self.inpainter.inpaint(v.rgb, v.fill, w, h)?;
+        let rgb = self.inpainter.inpaint_view(index, v.rgb, v.fill, w, h)?;
         // rendered depth is trusted where the remaining scene covers the pixel, outside the hole
         let valid: Vec<bool> = (0..w * h).map(|i| !v.hole[i] && !v.fill[i] && v.alpha[i] > 0.5).collect();
         if !self.depth_guidance {
@@ -160,11 +160,11 @@ impl Completer {
         let around: Vec<bool> = (0..w * h).map(|i| !v.fill[i] && covered[i]).collect();
         let planes = surfaces::surfaces_around(&disparity, &around, v.fill, w, h, depth::PLANE_SEED);
         let labels = planes.labels(&anchored.depth, w);
-        // the built-in inpainter fills again, surface by surface; a learned inpainter's output is
-        // kept, since it sees more than a surface label
+        // the built-in inpainter fills again, surface by surface; a learned or provided
+        // inpainting is kept, since it sees more than a surface label
         let rgb = match self.inpainter {
             Inpainter::BuiltIn => surfaces::fill_by_surface(v.rgb, v.fill, &labels, w, h, 3),
-            Inpainter::Onnx(_) => rgb,
+            Inpainter::Onnx(_) | Inpainter::Provided { .. } => rgb,
         };
         let depth = match &mut self.refiner {
             Some(den) => diffusion::masked_ddim(
@@ -196,10 +196,11 @@ impl Completer {
         })
     }
 
-    /// Inpaints `fill` of `image` (e.g. after color transfer made more pixels known), keeping
+    /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more pixels known), keeping
     /// each surface's colors on that surface where the built-in inpainter is used.
     pub fn inpaint_again(
         &mut self,
+        index: usize,
         image: &[f32],
         fill: &[bool],
         labels: &[u8],
@@ -208,7 +209,7 @@ impl Completer {
     ) -> Result<Vec<f32>> {
         match self.inpainter {
             Inpainter::BuiltIn => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
-            Inpainter::Onnx(_) => self.inpainter.inpaint(image, fill, w, h),
+            Inpainter::Onnx(_) | Inpainter::Provided { .. } => self.inpainter.inpaint_view(index, image, fill, w, h),
         }
     }
 }
