@@ -18,8 +18,13 @@ pub struct RemovalFlags {
     /// (`<scene>.json` of `cogeo tag`: mask subfolder names, or "object q").
     #[arg(long, value_delimiter = ',')]
     pub prompt: Vec<String>,
+    /// The built-in inpainter: exemplar (texture copied patch by patch from around the hole, each
+    /// background surface from itself; PatchMatch on the GPU) or harmonic (a smooth membrane fill,
+    /// the ablation). Ignored with --inpaint-model or --inpainted.
+    #[arg(long, value_enum, default_value = "exemplar")]
+    pub inpainter: BuiltInInpainter,
     /// ONNX inpainting model with the LaMa contract (image [1,3,512,512] in [0,1] and mask
-    /// [1,1,512,512], 1 = hole, in; RGB out). Default: the built-in harmonic inpainter.
+    /// [1,1,512,512], 1 = hole, in; RGB out), instead of the built-in inpainter.
     #[arg(long, conflicts_with = "inpainted")]
     pub inpaint_model: Option<PathBuf>,
     /// Bring your own inpainting: a folder of inpainted training views named like the images (the
@@ -168,6 +173,12 @@ pub fn write_views(dir: &Path, cameras: &[Camera], images: &[Vec<f32>]) -> Resul
     Ok(())
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BuiltInInpainter {
+    Exemplar,
+    Harmonic,
+}
+
 pub fn run(a: RemoveArgs) -> Result<()> {
     use cogeo::removal::complete::{depth::DepthPrior, diffusion::OnnxDenoiser, inpaint::Inpainter, Completer};
     let f = &a.removal;
@@ -186,7 +197,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
                 let sizes: Vec<(u32, u32)> = data.train.iter().map(|v| (v.camera.width, v.camera.height)).collect();
                 Inpainter::provided(dir, &names, &sizes)?
             }
-            (None, None) => Inpainter::BuiltIn,
+            (None, None) => Inpainter::Harmonic,
         },
         prior: match &f.depth_model {
             Some(p) => DepthPrior::onnx(p, f.depth_contract)?,
@@ -233,6 +244,10 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         background: f.background,
     };
     let gpu = open_gpu(&a.device)?;
+    if matches!(completer.inpainter, Inpainter::Harmonic) && f.inpainter == BuiltInInpainter::Exemplar {
+        let exemplar = cogeo::removal::complete::exemplar::ExemplarFill::new(&gpu, f.seed)?;
+        completer.inpainter = Inpainter::Exemplar(Box::new(exemplar));
+    }
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
     eprintln!(
         "removing label(s) {labels:?} from {} Gaussians; editing {} views on {}",

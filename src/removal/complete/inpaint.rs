@@ -1,6 +1,8 @@
 //! RGB completion of one view: fill the pixels of a hole mask.
 //!
-//! - `Inpainter::BuiltIn` needs no weights: the harmonic (membrane) interpolant of the pixels around
+//! - `Inpainter::Exemplar` (the default) needs no weights either: texture copied patch by patch
+//!   from around the hole, each background surface from itself (`exemplar.rs`).
+//! - `Inpainter::Harmonic` needs no weights: the harmonic (membrane) interpolant of the pixels around
 //!   the hole, solved coarse to fine (`harmonic::harmonic_fill`). Deterministic; smooth rather than
 //!   textured, which is what a masked PSNR rewards when nothing is known about the hole.
 //! - `Inpainter::Onnx` runs a user-supplied model with the LaMa contract: inputs `image`
@@ -22,7 +24,10 @@ use std::path::Path;
 pub const LAMA_SIZE: usize = 512;
 
 pub enum Inpainter {
-    BuiltIn,
+    /// The harmonic fill (the smooth ablation).
+    Harmonic,
+    /// Exemplar texture synthesis on the GPU (exemplar.rs); the default.
+    Exemplar(Box<super::exemplar::ExemplarFill>),
     Onnx(Box<Model>),
     /// Planar RGB per edited view, from `dir`.
     Provided {
@@ -41,7 +46,8 @@ impl Inpainter {
 
     pub fn name(&self) -> String {
         match self {
-            Inpainter::BuiltIn => "built-in harmonic".into(),
+            Inpainter::Harmonic => "built-in harmonic".into(),
+            Inpainter::Exemplar(_) => "built-in exemplar (PatchMatch)".into(),
             Inpainter::Onnx(m) => format!("onnx {}", m.path().display()),
             Inpainter::Provided { dir, .. } => format!("inpainted views from {}", dir.display()),
         }
@@ -93,11 +99,12 @@ impl Inpainter {
             return Ok(image.to_vec());
         };
         match self {
-            Inpainter::BuiltIn => {
+            Inpainter::Harmonic => {
                 let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
                 Ok(harmonic_fill(image, &known, w, h, 3))
             }
             Inpainter::Onnx(model) => lama(model, image, hole, w, h, bbox),
+            Inpainter::Exemplar(e) => e.fill(image, hole, &vec![0; w * h], w, h),
             Inpainter::Provided { dir, .. } => {
                 bail!("{}: provided inpaintings are per view (inpaint_view)", dir.display())
             }

@@ -3,7 +3,9 @@
 //! completed depth guides the color in turn: the built-in inpainter fills each background plane
 //! from that plane's pixels only.
 //!
-//! - `inpaint`: built-in harmonic fill, or a LaMa-contract ONNX model.
+//! - `inpaint`: the built-in inpainters (exemplar texture synthesis, harmonic fill), a
+//!   LaMa-contract ONNX model, or the user's own inpainted views.
+//! - `exemplar`: PatchMatch exemplar inpainting on the GPU, guided by the surfaces.
 //! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
 //!   edge-aware model-free refinement.
 //! - `diffusion`: the masked DDIM loop of a depth-inpainting denoiser (ONNX).
@@ -14,6 +16,7 @@
 
 pub mod depth;
 pub mod diffusion;
+pub mod exemplar;
 pub mod harmonic;
 pub mod inpaint;
 pub mod surfaces;
@@ -162,8 +165,9 @@ impl Completer {
         let labels = planes.labels(&anchored.depth, w);
         // the built-in inpainter fills again, surface by surface; a learned or provided
         // inpainting is kept, since it sees more than a surface label
-        let rgb = match self.inpainter {
-            Inpainter::BuiltIn => surfaces::fill_by_surface(v.rgb, v.fill, &labels, w, h, 3),
+        let rgb = match &self.inpainter {
+            Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, v.fill, &labels, w, h, 3),
+            Inpainter::Exemplar(e) => e.fill(v.rgb, v.fill, &labels, w, h)?,
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => rgb,
         };
         let depth = match &mut self.refiner {
@@ -207,8 +211,9 @@ impl Completer {
         w: usize,
         h: usize,
     ) -> Result<Vec<f32>> {
-        match self.inpainter {
-            Inpainter::BuiltIn => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
+        match &self.inpainter {
+            Inpainter::Harmonic => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
+            Inpainter::Exemplar(e) => e.fill(image, fill, labels, w, h),
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => self.inpainter.inpaint_view(index, image, fill, w, h),
         }
     }

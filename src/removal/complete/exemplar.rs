@@ -1,0 +1,356 @@
+//! The built-in texture-synthesizing inpainter, no weights: exemplar inpainting in the manner of
+//! Wexler, Shechtman and Irani (2007), with the nearest-neighbour field found by PatchMatch
+//! (Barnes et al. 2009), coarse to fine. Every pixel whose 7x7 patch touches the hole keeps the
+//! source pixel whose patch (fully known, inside the crop) looks most like its own; each hole pixel
+//! becomes the vote of what those patches put on it, and the two steps alternate. The completed
+//! depth guides it: a source on another background surface than the target's (the planes of
+//! `surfaces.rs`) pays a penalty larger than any color distance, so the floor continues the floor's
+//! texture and the wall the wall's. Matches are translations; on a receding floor the patch
+//! distance itself prefers sources at the same distance (the same rows), where the texture has the
+//! target's period. The coarsest level starts from the surface-wise harmonic fill.
+//!
+//! The GPU passes are `exemplar_nnf.comp` (one PatchMatch pass: propagation, random search, a
+//! global jump) and `exemplar_vote.comp`; the pyramid and the hand-over between levels are host
+//! work on small arrays. Deterministic: randomness is a hash of (seed, level, pass, pixel) and the
+//! field is updated Jacobi-style.
+
+use super::surfaces::fill_by_surface;
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
+use crate::image_ops::{bounding_box, Rect};
+use crate::rng::Rng;
+use crate::shaders;
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+
+/// Patch radius (7x7 patches); RADIUS in exemplar.glsl.
+pub const PATCH_RADIUS: usize = 3;
+const HOLE: u32 = 1;
+const SOURCE: u32 = 2;
+const TARGET: u32 = 4;
+/// Added to the patch distance (mean squared RGB difference, at most 1) of a source on another surface.
+const LABEL_PENALTY: f32 = 1.0;
+/// The vote's weight scale: exp(-(distance - best) / VOTE_SIGMA2).
+const VOTE_SIGMA2: f32 = 0.005;
+/// Search-then-vote rounds per pyramid level, and the propagation steps of each round's passes.
+const ROUNDS: usize = 5;
+const STEPS: [u32; 3] = [4, 2, 1];
+/// The coarsest level: the hole's box at most this many pixels across.
+const COARSEST_HOLE: usize = 12;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ExemplarPush {
+    image: u64,
+    info: u64,
+    nnf_in: u64,
+    dist_in: u64,
+    nnf_out: u64,
+    dist_out: u64,
+    targets: u64,
+    sources: u64,
+    count: u32,
+    num_sources: u32,
+    width: u32,
+    height: u32,
+    step: u32,
+    seed: u32,
+    radius: u32,
+    label_penalty: f32,
+}
+
+/// One level of the pyramid over the crop around the hole.
+#[derive(Clone)]
+struct Level {
+    w: usize,
+    h: usize,
+    /// Planar RGB; hole pixels hold the current estimate.
+    image: Vec<f32>,
+    hole: Vec<bool>,
+    labels: Vec<u8>,
+}
+
+impl Level {
+    /// HOLE / SOURCE / TARGET bits and the surface label (bits 8..15) of every pixel.
+    fn info(&self) -> Vec<u32> {
+        let (w, h, r) = (self.w, self.h, PATCH_RADIUS as isize);
+        // a summed-area table of the hole answers "any hole pixel in this window" in O(1)
+        let mut sat = vec![0u32; (w + 1) * (h + 1)];
+        for y in 0..h {
+            for x in 0..w {
+                sat[(y + 1) * (w + 1) + x + 1] =
+                    self.hole[y * w + x] as u32 + sat[y * (w + 1) + x + 1] + sat[(y + 1) * (w + 1) + x]
+                        - sat[y * (w + 1) + x];
+            }
+        }
+        let holes_in = |x0: isize, y0: isize, x1: isize, y1: isize| {
+            let (x0, y0) = (x0.max(0) as usize, y0.max(0) as usize);
+            let (x1, y1) = ((x1.min(w as isize - 1) + 1) as usize, (y1.min(h as isize - 1) + 1) as usize);
+            sat[y1 * (w + 1) + x1] + sat[y0 * (w + 1) + x0] - sat[y0 * (w + 1) + x1] - sat[y1 * (w + 1) + x0]
+        };
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as isize, (i / w) as isize);
+                let inside = x >= r && y >= r && x + r < w as isize && y + r < h as isize;
+                let touched = holes_in(x - r, y - r, x + r, y + r) > 0;
+                let mut bits = (self.labels[i] as u32) << 8;
+                if self.hole[i] {
+                    bits |= HOLE;
+                }
+                if inside && !touched {
+                    bits |= SOURCE;
+                }
+                if touched {
+                    bits |= TARGET;
+                }
+                bits
+            })
+            .collect()
+    }
+
+    /// The next coarser level: 2x2 blocks; a block is hole if any of its pixels is, its color the
+    /// mean of its known pixels, its label its first pixel's.
+    fn coarser(&self) -> Level {
+        let (w, h) = (self.w.div_ceil(2), self.h.div_ceil(2));
+        let (n, fine_n) = (w * h, self.w * self.h);
+        let mut out = Level { w, h, image: vec![0.0; 3 * n], hole: vec![false; n], labels: vec![0; n] };
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let mut known = 0;
+                for (fx, fy) in [(2 * x, 2 * y), (2 * x + 1, 2 * y), (2 * x, 2 * y + 1), (2 * x + 1, 2 * y + 1)] {
+                    if fx >= self.w || fy >= self.h {
+                        continue;
+                    }
+                    let f = fy * self.w + fx;
+                    out.hole[i] |= self.hole[f];
+                    if !self.hole[f] {
+                        known += 1;
+                        for c in 0..3 {
+                            out.image[c * n + i] += self.image[c * fine_n + f];
+                        }
+                    }
+                }
+                for c in 0..3 {
+                    out.image[c * n + i] /= known.max(1) as f32;
+                }
+                out.labels[i] = self.labels[2 * y * self.w + 2 * x];
+            }
+        }
+        out
+    }
+
+    fn hole_extent(&self) -> usize {
+        bounding_box(&self.hole, self.w).map_or(0, |r| r.width().max(r.height()))
+    }
+}
+
+pub struct ExemplarFill {
+    gpu: Gpu,
+    nnf: ComputePipeline,
+    vote: ComputePipeline,
+    seed: u64,
+}
+
+impl ExemplarFill {
+    pub fn new(gpu: &Gpu, seed: u64) -> Result<ExemplarFill> {
+        Ok(ExemplarFill {
+            gpu: gpu.clone(),
+            nnf: ComputePipeline::new(gpu, "exemplar_nnf", shaders::EXEMPLAR_NNF)?,
+            vote: ComputePipeline::new(gpu, "exemplar_vote", shaders::EXEMPLAR_VOTE)?,
+            seed,
+        })
+    }
+
+    /// Fills the `fill` pixels of the planar RGB `image` (w x h) with texture from the rest of the
+    /// image around the hole; `labels` (0 = none) keep each surface's pixels on that surface.
+    /// Pixels outside `fill` are returned unchanged.
+    pub fn fill(&self, image: &[f32], fill: &[bool], labels: &[u8], w: usize, h: usize) -> Result<Vec<f32>> {
+        let mut out = fill_by_surface(image, fill, labels, w, h, 3);
+        let Some(b) = bounding_box(fill, w) else { return Ok(out) };
+        // the crop: the hole's box grown by its size (at least 16 pixels) on every side
+        let (mx, my) = (b.width().max(16), b.height().max(16));
+        let win = Rect {
+            x0: b.x0.saturating_sub(mx),
+            y0: b.y0.saturating_sub(my),
+            x1: (b.x1 + mx).min(w),
+            y1: (b.y1 + my).min(h),
+        };
+        let (cw, ch) = (win.width(), win.height());
+        let at = |k: usize| (win.y0 + k / cw) * w + win.x0 + k % cw;
+        let mut levels = vec![Level {
+            w: cw,
+            h: ch,
+            image: (0..3)
+                .flat_map(|c| (0..cw * ch).map(move |k| (c, k)))
+                .map(|(c, k)| out[c * w * h + at(k)])
+                .collect(),
+            hole: (0..cw * ch).map(|k| fill[at(k)]).collect(),
+            labels: (0..cw * ch).map(|k| labels[at(k)]).collect(),
+        }];
+        loop {
+            let last = levels.last().unwrap();
+            if last.hole_extent() <= COARSEST_HOLE || last.w.min(last.h) / 2 < 4 * PATCH_RADIUS + 2 {
+                break;
+            }
+            let next = last.coarser();
+            levels.push(next);
+        }
+        // the coarsest level starts from the surface-wise harmonic fill and a random field
+        let coarsest = levels.last_mut().unwrap();
+        coarsest.image = fill_by_surface(&coarsest.image, &coarsest.hole, &coarsest.labels, coarsest.w, coarsest.h, 3);
+        let mut rng = Rng::new(self.seed ^ 0x5eed_e8e3);
+        let mut field: Option<(Vec<u32>, usize)> = None; // the coarser level's field and width
+        for li in (0..levels.len()).rev() {
+            let level = &mut levels[li];
+            let info = level.info();
+            let sources: Vec<u32> = (0..info.len() as u32).filter(|&i| info[i as usize] & SOURCE != 0).collect();
+            if sources.is_empty() {
+                continue; // no fully known patch at this size: keep the estimate from below
+            }
+            let nnf = initial_field(level, &info, &sources, field.as_ref(), &mut rng);
+            let coarsest = field.is_none();
+            let (image, nnf) = self.run_level(level, &info, &sources, nnf, coarsest, li as u64)?;
+            level.image = image;
+            field = Some((nnf, level.w));
+            if li > 0 {
+                // the finer level's hole starts from this level's estimate, upsampled
+                let (fw, fh, lw) = (levels[li - 1].w, levels[li - 1].h, levels[li].w);
+                let (fine_n, n) = (fw * fh, lw * levels[li].h);
+                let coarse = levels[li].image.clone();
+                let fine = &mut levels[li - 1];
+                for f in (0..fine_n).filter(|&f| fine.hole[f]) {
+                    let i = (f / fw / 2) * lw + (f % fw) / 2;
+                    for c in 0..3 {
+                        fine.image[c * fine_n + f] = coarse[c * n + i];
+                    }
+                }
+            }
+        }
+        let level0 = &levels[0];
+        for k in (0..cw * ch).filter(|&k| level0.hole[k]) {
+            for c in 0..3 {
+                out[c * w * h + at(k)] = level0.image[c * cw * ch + k];
+            }
+        }
+        Ok(out)
+    }
+
+    /// ROUNDS of (PatchMatch passes, vote) on one level; returns its image and field.
+    fn run_level(
+        &self,
+        level: &Level,
+        info: &[u32],
+        sources: &[u32],
+        nnf: Vec<u32>,
+        coarsest: bool,
+        index: u64,
+    ) -> Result<(Vec<f32>, Vec<u32>)> {
+        let gpu = &self.gpu;
+        let n = level.w * level.h;
+        let targets: Vec<u32> = (0..n as u32).filter(|&i| info[i as usize] & TARGET != 0).collect();
+        let holes: Vec<u32> = (0..n as u32).filter(|&i| info[i as usize] & HOLE != 0).collect();
+        let image = Buffer::from_slice(gpu, "exemplar image", &level.image)?;
+        let info_b = Buffer::from_slice(gpu, "exemplar info", info)?;
+        let fields =
+            [Buffer::from_slice(gpu, "exemplar field", &nnf)?, Buffer::from_slice(gpu, "exemplar field", &nnf)?];
+        let zeros = vec![0f32; n];
+        let dists = [
+            Buffer::from_slice(gpu, "exemplar distance", &zeros)?,
+            Buffer::from_slice(gpu, "exemplar distance", &zeros)?,
+        ];
+        let targets_b = Buffer::from_slice(gpu, "exemplar targets", &targets)?;
+        let holes_b = Buffer::from_slice(gpu, "exemplar holes", &holes)?;
+        let sources_b = Buffer::from_slice(gpu, "exemplar sources", sources)?;
+        let push = |from: usize, list: &Buffer, count: usize, step: u32, seed: u32, scale: f32| ExemplarPush {
+            image: image.address(),
+            info: info_b.address(),
+            nnf_in: fields[from].address(),
+            dist_in: dists[from].address(),
+            nnf_out: fields[1 - from].address(),
+            dist_out: dists[1 - from].address(),
+            targets: list.address(),
+            sources: sources_b.address(),
+            count: count as u32,
+            num_sources: sources.len() as u32,
+            width: level.w as u32,
+            height: level.h as u32,
+            step,
+            seed,
+            radius: level.w.max(level.h) as u32 / 2,
+            label_penalty: scale,
+        };
+        let mut rec = Recorder::new(gpu)?;
+        let mut current = 0;
+        if !coarsest {
+            // the upsampled field votes the first estimate of this level (all distances 0: equal weights)
+            rec.dispatch(
+                &self.vote,
+                &push(current, &holes_b, holes.len(), 0, 0, VOTE_SIGMA2),
+                dispatch_1d(holes.len().div_ceil(64) as u32),
+            );
+        }
+        let mut pass = 0u64;
+        for _ in 0..ROUNDS {
+            for &step in &STEPS {
+                let seed = (self.seed ^ (index << 40) ^ (pass << 20)) as u32
+                    ^ (self.seed >> 32) as u32
+                    ^ pass as u32 * 0x9e37_79b9;
+                rec.dispatch(
+                    &self.nnf,
+                    &push(current, &targets_b, targets.len(), step, seed, LABEL_PENALTY),
+                    dispatch_1d(targets.len().div_ceil(64) as u32),
+                );
+                current = 1 - current;
+                pass += 1;
+            }
+            rec.dispatch(
+                &self.vote,
+                &push(current, &holes_b, holes.len(), 0, 0, VOTE_SIGMA2),
+                dispatch_1d(holes.len().div_ceil(64) as u32),
+            );
+        }
+        rec.submit_and_wait()?;
+        Ok((image.download(gpu, 3 * n)?, fields[current].download(gpu, n)?))
+    }
+}
+
+/// The first field of a level: from the coarser level's field (a source at coarse (sx, sy) maps
+/// to fine (2 sx, 2 sy) plus the target's own parity) where that is a source here, else a random
+/// source, of the target's surface where there is one.
+fn initial_field(
+    level: &Level,
+    info: &[u32],
+    sources: &[u32],
+    coarser: Option<&(Vec<u32>, usize)>,
+    rng: &mut Rng,
+) -> Vec<u32> {
+    let w = level.w;
+    let mut by_label: Vec<Vec<u32>> = vec![Vec::new(); 256];
+    for &s in sources {
+        by_label[level.labels[s as usize] as usize].push(s);
+    }
+    let pick = |label: u8, rng: &mut Rng| {
+        let same = &by_label[label as usize];
+        let from = if label != 0 && !same.is_empty() { same } else { sources };
+        from[(rng.next_u64() % from.len() as u64) as usize]
+    };
+    (0..info.len())
+        .map(|i| {
+            if info[i] & TARGET == 0 {
+                return sources[0];
+            }
+            if let Some((field, cw)) = coarser {
+                let (x, y) = (i % w, i / w);
+                let c = (y / 2) * cw + x / 2;
+                if c < field.len() {
+                    let s = field[c] as usize;
+                    let (sx, sy) = (2 * (s % cw) + x % 2, 2 * (s / cw) + y % 2);
+                    if sx < w && sy < level.h && info[sy * w + sx] & SOURCE != 0 {
+                        return (sy * w + sx) as u32;
+                    }
+                }
+            }
+            pick(level.labels[i], rng)
+        })
+        .collect()
+}
