@@ -36,9 +36,10 @@ const SCENES: [SceneSpec; 3] = [
 ];
 
 /// (name, tagging method, extra `cogeo remove` flags)
-const VARIANTS: [(&str, &str, &[&str]); 7] = [
+const VARIANTS: [(&str, &str, &[&str]); 8] = [
     ("cogeo (full)", "vote", &[]),
     ("removal only", "vote", &["--removal-only"]),
+    ("harmonic fill (no texture synthesis)", "vote", &["--inpainter", "harmonic"]),
     ("no depth guidance", "vote", &["--no-depth-guidance"]),
     ("no color transfer", "vote", &["--no-transfer"]),
     ("2D-projection selection", "project", &[]),

@@ -32,11 +32,15 @@ layout(push_constant) uniform Push {
 };
 
 // Mean squared RGB difference between the patch at target t and the patch at source s, over the
-// target patch's pixels inside the image, plus the surface penalty.
-float patch_distance(ivec2 t, ivec2 s, uint t_label) {
+// target patch's pixels inside the image and on the target's surface (a kept object in front of
+// the hole must not pull the match toward its own edge), plus the surface penalty.
+// Stops early (returning a value above `bound`) once the partial sum already exceeds `bound` for
+// every pixel the patch could still count: the candidate cannot win.
+float patch_distance(ivec2 t, ivec2 s, uint t_label, float bound) {
     uint n = width * height;
     float acc = 0.0;
     int used = 0;
+    float stop = bound * float(3 * (2 * RADIUS + 1) * (2 * RADIUS + 1));
     for (int dy = -RADIUS; dy <= RADIUS; dy++) {
         int ty = t.y + dy;
         if (ty < 0 || ty >= int(height)) continue;
@@ -44,6 +48,7 @@ float patch_distance(ivec2 t, ivec2 s, uint t_label) {
             int tx = t.x + dx;
             if (tx < 0 || tx >= int(width)) continue;
             uint a = uint(ty) * width + uint(tx);
+            if (t_label != 0 && label_of(info.v[a]) != t_label) continue;
             uint b = uint(s.y + dy) * width + uint(s.x + dx);  // a source patch is inside the image
             for (uint c = 0; c < 3; c++) {
                 float d = image.v[c * n + a] - image.v[c * n + b];
@@ -51,6 +56,7 @@ float patch_distance(ivec2 t, ivec2 s, uint t_label) {
             }
             used++;
         }
+        if (acc > stop) return 1e30;
     }
     float dist = acc / float(3 * max(used, 1));
     uint s_label = label_of(info.v[uint(s.y) * width + uint(s.x)]);

@@ -31,8 +31,13 @@ const TARGET: u32 = 4;
 const LABEL_PENALTY: f32 = 1.0;
 /// The vote's weight scale: exp(-(distance - best) / VOTE_SIGMA2).
 const VOTE_SIGMA2: f32 = 0.005;
-/// Search-then-vote rounds per pyramid level, and the propagation steps of each round's passes.
-const ROUNDS: usize = 5;
+/// Search-then-vote rounds on the coarsest level (which finds the layout) and on the finer ones
+/// (which start from the coarser field and only refine it), and the propagation steps of each
+/// round's passes.
+const ROUNDS_COARSEST: usize = 5;
+const ROUNDS_FINER: usize = 2;
+/// The random search's largest radius on the finer levels (the coarsest searches half its crop).
+const FINER_RADIUS: u32 = 8;
 const STEPS: [u32; 3] = [4, 2, 1];
 /// The coarsest level: the hole's box at most this many pixels across.
 const COARSEST_HOLE: usize = 12;
@@ -165,7 +170,7 @@ impl ExemplarFill {
     /// image around the hole; `labels` (0 = none) keep each surface's pixels on that surface.
     /// Pixels outside `fill` are returned unchanged.
     pub fn fill(&self, image: &[f32], fill: &[bool], labels: &[u8], w: usize, h: usize) -> Result<Vec<f32>> {
-        let mut out = fill_by_surface(image, fill, labels, w, h, 3);
+        let mut out = image.to_vec();
         let Some(b) = bounding_box(fill, w) else { return Ok(out) };
         // the crop: the hole's box grown by its size (at least 16 pixels) on every side
         let (mx, my) = (b.width().max(16), b.height().max(16));
@@ -200,6 +205,7 @@ impl ExemplarFill {
         coarsest.image = fill_by_surface(&coarsest.image, &coarsest.hole, &coarsest.labels, coarsest.w, coarsest.h, 3);
         let mut rng = Rng::new(self.seed ^ 0x5eed_e8e3);
         let mut field: Option<(Vec<u32>, usize)> = None; // the coarser level's field and width
+        let mut synthesized = false;
         for li in (0..levels.len()).rev() {
             let level = &mut levels[li];
             let info = level.info();
@@ -212,6 +218,7 @@ impl ExemplarFill {
             let (image, nnf) = self.run_level(level, &info, &sources, nnf, coarsest, li as u64)?;
             level.image = image;
             field = Some((nnf, level.w));
+            synthesized = true;
             if li > 0 {
                 // the finer level's hole starts from this level's estimate, upsampled
                 let (fw, fh, lw) = (levels[li - 1].w, levels[li - 1].h, levels[li].w);
@@ -225,6 +232,10 @@ impl ExemplarFill {
                     }
                 }
             }
+        }
+        if !synthesized {
+            // no fully known patch at any size (a hole filling its crop): the smooth fill
+            return Ok(fill_by_surface(image, fill, labels, w, h, 3));
         }
         let level0 = &levels[0];
         for k in (0..cw * ch).filter(|&k| level0.hole[k]) {
@@ -276,7 +287,7 @@ impl ExemplarFill {
             height: level.h as u32,
             step,
             seed,
-            radius: level.w.max(level.h) as u32 / 2,
+            radius: if coarsest { level.w.max(level.h) as u32 / 2 } else { FINER_RADIUS },
             label_penalty: scale,
         };
         let mut rec = Recorder::new(gpu)?;
@@ -290,7 +301,7 @@ impl ExemplarFill {
             );
         }
         let mut pass = 0u64;
-        for _ in 0..ROUNDS {
+        for _ in 0..if coarsest { ROUNDS_COARSEST } else { ROUNDS_FINER } {
             for &step in &STEPS {
                 let seed = (self.seed ^ (index << 40) ^ (pass << 20)) as u32
                     ^ (self.seed >> 32) as u32

@@ -127,7 +127,13 @@ impl Completer {
 
     pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {
         let (w, h) = (v.width, v.height);
-        let rgb = self.inpainter.inpaint_view(index, v.rgb, v.fill, w, h)?;
+        // The first fill serves the ablation without depth, a learned depth prior (which reads the
+        // image) and the learned or provided inpaintings (kept as they are); the built-in ones
+        // fill again below once the surfaces are known, and the built-in prior never reads it.
+        let first_needed = !self.depth_guidance
+            || matches!(self.prior, DepthPrior::Onnx(..))
+            || matches!(self.inpainter, Inpainter::Onnx(_) | Inpainter::Provided { .. });
+        let rgb = if first_needed { self.inpainter.inpaint_view(index, v.rgb, v.fill, w, h)? } else { v.rgb.to_vec() };
         // rendered depth is trusted where the remaining scene covers the pixel, outside the hole
         let valid: Vec<bool> = (0..w * h).map(|i| !v.hole[i] && !v.fill[i] && v.alpha[i] > 0.5).collect();
         if !self.depth_guidance {
