@@ -11,7 +11,7 @@
 //!
 //! The GPU passes are `exemplar_nnf.comp` (one PatchMatch pass: propagation, random search, a
 //! global jump) and `exemplar_vote.comp`; the pyramid and the hand-over between levels are host
-//! work on small arrays. Deterministic: randomness is a hash of (seed, level, pass, pixel) and the
+//! work on small arrays. Deterministic: randomness is a hash of (seed, pass, pixel) and the
 //! field is updated Jacobi-style.
 
 use super::surfaces::fill_by_surface;
@@ -215,7 +215,7 @@ impl ExemplarFill {
             }
             let nnf = initial_field(level, &info, &sources, field.as_ref(), &mut rng);
             let coarsest = field.is_none();
-            let (image, nnf) = self.run_level(level, &info, &sources, nnf, coarsest, li as u64)?;
+            let (image, nnf) = self.run_level(level, &info, &sources, nnf, coarsest)?;
             level.image = image;
             field = Some((nnf, level.w));
             synthesized = true;
@@ -254,7 +254,6 @@ impl ExemplarFill {
         sources: &[u32],
         nnf: Vec<u32>,
         coarsest: bool,
-        index: u64,
     ) -> Result<(Vec<f32>, Vec<u32>)> {
         let gpu = &self.gpu;
         let n = level.w * level.h;
@@ -303,9 +302,10 @@ impl ExemplarFill {
         let mut pass = 0u64;
         for _ in 0..if coarsest { ROUNDS_COARSEST } else { ROUNDS_FINER } {
             for &step in &STEPS {
-                let seed = (self.seed ^ (index << 40) ^ (pass << 20)) as u32
-                    ^ (self.seed >> 32) as u32
-                    ^ pass as u32 * 0x9e37_79b9;
+                // the pass's hash seed: the run's seed folded to 32 bits, mixed with the pass number
+                let pass32 = pass as u32;
+                let seed =
+                    (self.seed as u32 ^ (pass32 << 20)) ^ (self.seed >> 32) as u32 ^ pass32.wrapping_mul(0x9e37_79b9);
                 rec.dispatch(
                     &self.nnf,
                     &push(current, &targets_b, targets.len(), step, seed, LABEL_PENALTY),
