@@ -51,6 +51,17 @@ impl Rect {
     pub fn height(&self) -> usize {
         self.y1 - self.y0
     }
+
+    /// This rectangle grown by `mx` pixels left and right and `my` up and down, clamped to a
+    /// w x h image.
+    pub fn grown(&self, mx: usize, my: usize, w: usize, h: usize) -> Rect {
+        Rect {
+            x0: self.x0.saturating_sub(mx),
+            y0: self.y0.saturating_sub(my),
+            x1: (self.x1 + mx).min(w),
+            y1: (self.y1 + my).min(h),
+        }
+    }
 }
 
 /// Bounding box of the set pixels, or None for an empty mask.

@@ -14,9 +14,9 @@
 //! work on small arrays. Deterministic: randomness is a hash of (seed, pass, pixel) and the
 //! field is updated Jacobi-style.
 
-use super::surfaces::fill_by_surface;
+use super::surfaces::{self, fill_by_surface};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
-use crate::image_ops::{bounding_box, Rect};
+use crate::image_ops::{bounding_box, crop};
 use crate::rng::Rng;
 use crate::shaders;
 use anyhow::Result;
@@ -172,23 +172,13 @@ impl ExemplarFill {
     pub fn fill(&self, image: &[f32], fill: &[bool], labels: &[u8], w: usize, h: usize) -> Result<Vec<f32>> {
         let mut out = image.to_vec();
         let Some(b) = bounding_box(fill, w) else { return Ok(out) };
-        // the crop: the hole's box grown by its size (at least 16 pixels) on every side
-        let (mx, my) = (b.width().max(16), b.height().max(16));
-        let win = Rect {
-            x0: b.x0.saturating_sub(mx),
-            y0: b.y0.saturating_sub(my),
-            x1: (b.x1 + mx).min(w),
-            y1: (b.y1 + my).min(h),
-        };
+        let win = surfaces::fill_window(b, w, h);
         let (cw, ch) = (win.width(), win.height());
         let at = |k: usize| (win.y0 + k / cw) * w + win.x0 + k % cw;
         let mut levels = vec![Level {
             w: cw,
             h: ch,
-            image: (0..3)
-                .flat_map(|c| (0..cw * ch).map(move |k| (c, k)))
-                .map(|(c, k)| out[c * w * h + at(k)])
-                .collect(),
+            image: crop(image, w, h, 3, win),
             hole: (0..cw * ch).map(|k| fill[at(k)]).collect(),
             labels: (0..cw * ch).map(|k| labels[at(k)]).collect(),
         }];

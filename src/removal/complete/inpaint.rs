@@ -115,9 +115,7 @@ impl Inpainter {
 /// The context window around a hole: the box grown by half its size (at least `min_margin`),
 /// clamped to the image.
 pub fn context_window(b: Rect, w: usize, h: usize, min_margin: usize) -> Rect {
-    let mx = (b.width() / 2).max(min_margin);
-    let my = (b.height() / 2).max(min_margin);
-    Rect { x0: b.x0.saturating_sub(mx), y0: b.y0.saturating_sub(my), x1: (b.x1 + mx).min(w), y1: (b.y1 + my).min(h) }
+    b.grown((b.width() / 2).max(min_margin), (b.height() / 2).max(min_margin), w, h)
 }
 
 fn lama(model: &mut Model, image: &[f32], hole: &[bool], w: usize, h: usize, bbox: Rect) -> Result<Vec<f32>> {

@@ -9,7 +9,7 @@
 //!   surface only (`fill_by_surface`), so floor texture does not bleed into the wall.
 
 use super::harmonic::harmonic_fill;
-use crate::image_ops::{bounding_box, distance_to, Rect};
+use crate::image_ops::{bounding_box, crop, distance_to, Rect};
 
 /// A plane as its inverse depth over the image: disparity = a x + b y + c at pixel center (x, y).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -282,6 +282,12 @@ pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h:
     }
 }
 
+/// The window the built-in inpainters work in: the fill's bounding box grown by its own size (at
+/// least 16 pixels) on every side, clamped to the image.
+pub fn fill_window(b: Rect, w: usize, h: usize) -> Rect {
+    b.grown(b.width().max(16), b.height().max(16), w, h)
+}
+
 /// Fills the `fill` pixels of the planar `channels`-channel `image` (w x h): a pixel labelled with
 /// surface s (`labels`, 0 = none) takes the harmonic interpolant of the known pixels of surface s
 /// only; unlabelled ones that of all known pixels. Worked in a window around the fill.
@@ -289,13 +295,7 @@ pub fn fill_by_surface(image: &[f32], fill: &[bool], labels: &[u8], w: usize, h:
     let known: Vec<bool> = fill.iter().map(|&m| !m).collect();
     let mut out = harmonic_fill(image, &known, w, h, channels);
     let Some(b) = bounding_box(fill, w) else { return out };
-    let (mx, my) = (b.width().max(16), b.height().max(16));
-    let win = Rect {
-        x0: b.x0.saturating_sub(mx),
-        y0: b.y0.saturating_sub(my),
-        x1: (b.x1 + mx).min(w),
-        y1: (b.y1 + my).min(h),
-    };
+    let win = fill_window(b, w, h);
     let (cw, ch) = (win.width(), win.height());
     let at = |x: usize, y: usize| (win.y0 + y) * w + win.x0 + x;
     let surfaces = labels.iter().copied().max().unwrap_or(0);
@@ -306,13 +306,7 @@ pub fn fill_by_surface(image: &[f32], fill: &[bool], labels: &[u8], w: usize, h:
         if targets == 0 || !known_s.iter().any(|&k| k) {
             continue;
         }
-        let mut crop = vec![0f32; channels * cw * ch];
-        for c in 0..channels {
-            for k in 0..cw * ch {
-                crop[c * cw * ch + k] = image[c * w * h + at(k % cw, k / cw)];
-            }
-        }
-        let filled = harmonic_fill(&crop, &known_s, cw, ch, channels);
+        let filled = harmonic_fill(&crop(image, w, h, channels, win), &known_s, cw, ch, channels);
         for k in 0..cw * ch {
             let p = at(k % cw, k / cw);
             if fill[p] && labels[p] == s {
