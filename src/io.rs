@@ -28,6 +28,30 @@ pub fn write_atomic(path: &Path, body: impl FnOnce(&mut BufWriter<std::fs::File>
     result.with_context(|| format!("writing {}", path.display()))
 }
 
+/// Decodes an image file's bytes (PNG or JPEG, found from the content), refusing sizes beyond
+/// `MAX_IMAGE_SIDE` per side, before any pixel memory is taken. The decoder may allocate at most
+/// 2048 bytes per byte of file (+16 MiB): deflate cannot compress more than about 1032:1, so a
+/// real image always fits, while a 200-byte file whose header claims 30000 x 30000 pixels is
+/// refused instead of taking a gigabyte. `what` names the file in errors.
+pub fn decode_image(data: &[u8], what: &str) -> Result<image::DynamicImage> {
+    let side = crate::scene::camera::MAX_IMAGE_SIDE;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(side);
+    limits.max_image_height = Some(side);
+    limits.max_alloc = Some((16 << 20) + 2048 * data.len() as u64);
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(data))
+        .with_guessed_format()
+        .with_context(|| format!("{what}: cannot read image"))?;
+    reader.limits(limits);
+    reader.decode().map_err(|e| anyhow::anyhow!("{what}: cannot decode image ({e})"))
+}
+
+/// Reads and decodes an image file (`decode_image`).
+pub fn read_image(path: &Path) -> Result<image::DynamicImage> {
+    let data = std::fs::read(path).with_context(|| format!("{}: cannot read image", path.display()))?;
+    decode_image(&data, &path.display().to_string())
+}
+
 /// 8-bit value of a [0, 1] float, rounded; values outside are clamped.
 pub fn to_u8(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8

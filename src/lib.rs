@@ -5,10 +5,12 @@
 //! (optimization), `tag` (object labels per Gaussian, the paper's first stage), then `removal` (the
 //! later stages in order: selection and hole masks, completion, fusion and pruning, refinement, and
 //! the pipeline that strings them together), `eval` (metrics), `synth` (datasets with exact ground
-//! truth); helpers: `image_ops` (resizing, masks), `io` (image files), `onnx` (user-supplied
+//! truth); helpers: `image_ops` (resizing, masks), `io` (image files), `flag_values` (flag
+//! parsers), `onnx` (user-supplied
 //! models), `rng` (seeded random numbers). The command line lives in the binary (src/cli).
 
 pub mod eval;
+pub mod flag_values;
 pub mod gpu;
 pub mod image_ops;
 pub mod io;

@@ -26,17 +26,7 @@ pub struct ScaleArgs {
     pub downscale: u32,
 }
 
-pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("expected r,g,b numbers, got {s:?}"))?;
-    if v.len() != 3 || v.iter().any(|c| !(0.0..=1.0).contains(c)) {
-        return Err(format!("expected three values in [0, 1] as r,g,b, got {s:?}"));
-    }
-    Ok([v[0], v[1], v[2]])
-}
+pub use cogeo::flag_values::parse_rgb;
 
 pub fn progress(len: usize, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);

@@ -21,7 +21,7 @@ pub struct DemoArgs {
     #[arg(long)]
     pub quick: bool,
     /// Labels of the synth objects to remove at once (the scene has 3 in --quick, 4 otherwise).
-    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    #[arg(long, value_delimiter = ',', default_value = "1,2", value_parser = cogeo::flag_values::parse_object_label)]
     pub labels: Vec<u8>,
     /// Scene seed (object placement and textures).
     #[arg(long, default_value_t = 2)]

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 #[derive(Args, Clone)]
 pub struct RemovalFlags {
     /// Labels to remove, comma-separated (as in the tagged scene's `label` property).
-    #[arg(long, value_delimiter = ',', required_unless_present = "prompt")]
+    #[arg(long, value_delimiter = ',', required_unless_present = "prompt", value_parser = cogeo::flag_values::parse_object_label)]
     pub labels: Vec<u8>,
     /// Object names to remove, comma-separated, looked up in the tagging sidecar's names
     /// (`<scene>.json` of `cogeo tag`: mask subfolder names, or "object q").

@@ -48,7 +48,7 @@ pub struct EvalConfig {
 }
 
 fn load_mask(path: &Path, labels: &[u8], w: u32, h: u32) -> Result<Vec<bool>> {
-    let img = image::open(path).with_context(|| format!("{}: cannot read mask", path.display()))?.to_luma8();
+    let img = crate::io::read_image(path)?.to_luma8();
     if img.dimensions() != (w, h) {
         bail!("{}: mask is {}x{}, the render is {w}x{h}", path.display(), img.width(), img.height());
     }

@@ -85,7 +85,7 @@ pub fn synth_metrics(
         }
         let mask_path = find_image(&mask_dir, &cam.name)
             .ok_or_else(|| anyhow::anyhow!("{}: no object mask for {}", mask_dir.display(), cam.name))?;
-        let labels = image::open(&mask_path)?.to_luma8().into_raw();
+        let labels = crate::io::read_image(&mask_path)?.to_luma8().into_raw();
         let mask: Vec<bool> = labels.iter().map(|l| removed_labels.contains(l)).collect();
         let Some(p) = masked_psnr(render, &gt, &mask) else { continue };
         m.masked_psnr += p;

@@ -1,6 +1,6 @@
 //! Pinhole cameras in the OpenCV/COLMAP frame (+x right, +y down, +z forward), and INRIA cameras.json.
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{bail, Context, Result};
 use std::path::Path;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -19,7 +19,44 @@ pub struct Camera {
     pub translation: [f64; 3],
 }
 
+/// The largest image width or height cogeo accepts (pixel counts stay below 2^30, so pixel indices
+/// fit u32 arithmetic everywhere).
+pub const MAX_IMAGE_SIDE: u32 = 32768;
+
 impl Camera {
+    /// Checks what every pass assumes of a loaded camera: a size in 1..=MAX_IMAGE_SIDE, positive
+    /// finite focal lengths, and a finite pose whose rotation is orthonormal. `what` names the
+    /// camera's source in the error.
+    pub fn check(&self, what: &str) -> Result<()> {
+        let side = 1..=MAX_IMAGE_SIDE;
+        if !side.contains(&self.width) || !side.contains(&self.height) {
+            bail!("{what}: image size {}x{} outside 1..={MAX_IMAGE_SIDE} per side", self.width, self.height);
+        }
+        if !(self.fx.is_finite() && self.fy.is_finite() && self.fx > 0.0 && self.fy > 0.0) {
+            bail!("{what}: focal lengths must be positive and finite (fx {}, fy {})", self.fx, self.fy);
+        }
+        if !(self.cx.is_finite() && self.cy.is_finite()) {
+            bail!("{what}: principal point ({}, {}) is not finite", self.cx, self.cy);
+        }
+        let r = &self.rotation;
+        if !r.iter().flatten().chain(&self.translation).all(|v| v.is_finite()) {
+            bail!("{what}: the pose has a NaN or infinite value (a zero quaternion?)");
+        }
+        let max_error = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let dot: f64 = (0..3).map(|k| r[i][k] * r[j][k]).sum();
+                (dot - if i == j { 1.0 } else { 0.0 }).abs()
+            })
+            .fold(0.0, f64::max);
+        let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+            + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+        if max_error > 1e-3 || det < 0.0 {
+            bail!("{what}: the rotation is not a rotation (R R^T off identity by {max_error:.2e}, det {det:.3})");
+        }
+        Ok(())
+    }
+
     /// Camera center in world coordinates: -R^T t.
     pub fn center(&self) -> [f64; 3] {
         let r = &self.rotation;
@@ -123,17 +160,19 @@ struct JsonCamera {
 
 /// Reads INRIA `cameras.json`: camera-to-world rotation and camera center, principal point centered.
 pub fn read_cameras_json(path: &Path) -> Result<Vec<Camera>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    let data = std::fs::read(path).with_context(|| format!("{}: cannot read", path.display()))?;
+    parse_cameras_json(&data, &path.display().to_string())
+}
+
+/// `read_cameras_json` on the file's bytes (`what` names it in errors).
+pub fn parse_cameras_json(data: &[u8], what: &str) -> Result<Vec<Camera>> {
     let list: Vec<JsonCamera> =
-        serde_json::from_str(&text).with_context(|| format!("{}: not an INRIA cameras.json", path.display()))?;
+        serde_json::from_slice(data).with_context(|| format!("{what}: not an INRIA cameras.json"))?;
     if list.is_empty() {
-        bail!("{}: no cameras", path.display());
+        bail!("{what}: no cameras");
     }
     list.into_iter()
         .map(|c| {
-            if c.width == 0 || c.height == 0 || !(c.fx > 0.0 && c.fy > 0.0) {
-                return Err(anyhow!("{}: camera {:?} has invalid size or focal length", path.display(), c.img_name));
-            }
             let r = c.rotation; // camera to world
             let rotation = [[r[0][0], r[1][0], r[2][0]], [r[0][1], r[1][1], r[2][1]], [r[0][2], r[1][2], r[2][2]]];
             let p = c.position;
@@ -142,7 +181,7 @@ pub fn read_cameras_json(path: &Path) -> Result<Vec<Camera>> {
                 -(rotation[1][0] * p[0] + rotation[1][1] * p[1] + rotation[1][2] * p[2]),
                 -(rotation[2][0] * p[0] + rotation[2][1] * p[1] + rotation[2][2] * p[2]),
             ];
-            Ok(Camera {
+            let camera = Camera {
                 name: c.img_name,
                 width: c.width,
                 height: c.height,
@@ -152,13 +191,24 @@ pub fn read_cameras_json(path: &Path) -> Result<Vec<Camera>> {
                 cy: c.height as f64 / 2.0,
                 rotation,
                 translation,
-            })
+            };
+            camera.check(&format!("{what}: camera {:?}", camera.name))?;
+            Ok(camera)
         })
         .collect()
 }
 
 /// Writes INRIA `cameras.json` (atomically).
 pub fn write_cameras_json(cameras: &[Camera], path: &Path) -> Result<()> {
+    let text = encode_cameras_json(cameras)?;
+    crate::io::write_atomic(path, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes()).map_err(Into::into)
+    })
+}
+
+/// The text of INRIA `cameras.json` for `cameras`.
+pub fn encode_cameras_json(cameras: &[Camera]) -> Result<String> {
     let list: Vec<JsonCamera> = cameras
         .iter()
         .enumerate()
@@ -176,11 +226,7 @@ pub fn write_cameras_json(cameras: &[Camera], path: &Path) -> Result<()> {
             }
         })
         .collect();
-    let text = serde_json::to_string_pretty(&list)?;
-    crate::io::write_atomic(path, |w| {
-        use std::io::Write;
-        w.write_all(text.as_bytes()).map_err(Into::into)
-    })
+    Ok(serde_json::to_string_pretty(&list)?)
 }
 /// Resizes every camera to `width` x `height` (intrinsics scaled); with only one of them given,
 /// the other follows each camera's aspect ratio; with neither, the cameras are returned as they are.

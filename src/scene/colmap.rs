@@ -84,8 +84,8 @@ fn to_pinhole(
             warnings.push(w);
         }
     }
-    if width == 0 || height == 0 || !(fx > 0.0 && fy > 0.0) {
-        bail!("{what}: camera with invalid size {width}x{height} or focal length");
+    if !(fx.is_finite() && fy.is_finite() && fx > 0.0 && fy > 0.0 && cx.is_finite() && cy.is_finite()) {
+        bail!("{what}: camera with invalid intrinsics (fx {fx}, fy {fy}, cx {cx}, cy {cy})");
     }
     Ok(Intrinsics { width, height, fx, fy, cx, cy })
 }
@@ -98,8 +98,8 @@ struct Bin<'a> {
 
 impl Bin<'_> {
     fn take(&mut self, n: usize) -> Result<&[u8]> {
-        if self.pos + n > self.data.len() {
-            bail!("{}: truncated binary COLMAP file", self.what);
+        if n > self.data.len() - self.pos {
+            bail!("{}: truncated binary COLMAP file (needs {n} more bytes at offset {})", self.what, self.pos);
         }
         let s = &self.data[self.pos..self.pos + n];
         self.pos += n;
@@ -113,6 +113,20 @@ impl Bin<'_> {
     }
     fn f64(&mut self) -> Result<f64> {
         Ok(f64::from_le_bytes(self.take(8)?.try_into().unwrap()))
+    }
+    /// A count read from the file: a claim, checked against the bytes left (each item takes at
+    /// least `min_item_bytes`) before anything is sized by it.
+    fn count(&mut self, min_item_bytes: usize) -> Result<usize> {
+        let n = self.u64()?;
+        let left = (self.data.len() - self.pos) as u64;
+        if n > left / min_item_bytes as u64 {
+            bail!(
+                "{}: claims {n} entries at offset {} but only {left} bytes follow (truncated or corrupt)",
+                self.what,
+                self.pos - 8
+            );
+        }
+        Ok(n as usize)
     }
     fn string(&mut self) -> Result<String> {
         let start = self.pos;
@@ -129,13 +143,32 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     Ok(v)
 }
 
-fn read_cameras(dir: &Path, warnings: &mut Vec<String>) -> Result<HashMap<i64, Intrinsics>> {
+fn text<'a>(data: &'a [u8], what: &str) -> Result<&'a str> {
+    std::str::from_utf8(data).map_err(|e| anyhow!("{what}: not UTF-8 text ({e})"))
+}
+
+/// The width or height of a camera as stored (u64 in binary models), checked against the largest
+/// image cogeo handles.
+fn image_side(v: u64, what: &str) -> Result<u32> {
+    if v == 0 || v > super::camera::MAX_IMAGE_SIDE as u64 {
+        bail!("{what}: camera width/height {v} outside 1..={}", super::camera::MAX_IMAGE_SIDE);
+    }
+    Ok(v as u32)
+}
+
+/// One COLMAP model file's bytes, whether it is the text (`.txt`) or binary (`.bin`) variant, and
+/// its name for errors.
+pub struct ModelFile<'a> {
+    pub data: &'a [u8],
+    pub text: bool,
+    pub what: &'a str,
+}
+
+fn parse_cameras(f: &ModelFile, warnings: &mut Vec<String>) -> Result<HashMap<i64, Intrinsics>> {
+    let what = f.what;
     let mut out = HashMap::new();
-    let txt = dir.join("cameras.txt");
-    if txt.exists() {
-        let what = txt.display().to_string();
-        let text = std::fs::read_to_string(&txt).with_context(|| format!("{what}: cannot read"))?;
-        for (ln, line) in text.lines().enumerate() {
+    if f.text {
+        for (ln, line) in text(f.data, what)?.lines().enumerate() {
             let line = line.trim();
             if line.is_empty() || line.starts_with('#') {
                 continue;
@@ -144,33 +177,35 @@ fn read_cameras(dir: &Path, warnings: &mut Vec<String>) -> Result<HashMap<i64, I
             if w.len() < 4 {
                 bail!("{what}:{}: expected CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]", ln + 1);
             }
-            let parse_err = || anyhow!("{what}:{}: unparsable camera line", ln + 1);
+            let at = format!("{what}:{}", ln + 1);
+            let parse_err = || anyhow!("{at}: unparsable camera line");
             let id: i64 = w[0].parse().map_err(|_| parse_err())?;
-            let width: u32 = w[2].parse().map_err(|_| parse_err())?;
-            let height: u32 = w[3].parse().map_err(|_| parse_err())?;
+            let width = image_side(w[2].parse().map_err(|_| parse_err())?, &at)?;
+            let height = image_side(w[3].parse().map_err(|_| parse_err())?, &at)?;
             let params: Vec<f64> =
                 w[4..].iter().map(|s| s.parse()).collect::<Result<_, _>>().map_err(|_| parse_err())?;
-            out.insert(id, to_pinhole(&format!("{what}:{}", ln + 1), w[1], width, height, &params, warnings)?);
+            if out.insert(id, to_pinhole(&at, w[1], width, height, &params, warnings)?).is_some() {
+                bail!("{at}: camera id {id} appears twice");
+            }
         }
     } else {
-        let path = dir.join("cameras.bin");
-        let what = path.display().to_string();
-        let data = read_bytes(&path)?;
-        let mut b = Bin { data: &data, pos: 0, what: &what };
-        let n = b.u64()?;
+        let mut b = Bin { data: f.data, pos: 0, what };
+        let n = b.count(24)?;
         for _ in 0..n {
             let id = b.i32()? as i64;
             let model_id = b.i32()?;
             let (model, np) =
                 model_info(model_id).ok_or_else(|| anyhow!("{what}: unknown camera model id {model_id}"))?;
-            let width = b.u64()? as u32;
-            let height = b.u64()? as u32;
+            let width = image_side(b.u64()?, what)?;
+            let height = image_side(b.u64()?, what)?;
             let params: Vec<f64> = (0..np).map(|_| b.f64()).collect::<Result<_>>()?;
-            out.insert(id, to_pinhole(&what, model, width, height, &params, warnings)?);
+            if out.insert(id, to_pinhole(what, model, width, height, &params, warnings)?).is_some() {
+                bail!("{what}: camera id {id} appears twice");
+            }
         }
     }
     if out.is_empty() {
-        bail!("{}: the COLMAP model has no cameras", dir.display());
+        bail!("{what}: the COLMAP model has no cameras");
     }
     Ok(out)
 }
@@ -182,14 +217,13 @@ struct ImageEntry {
     camera_id: i64,
 }
 
-fn read_images(dir: &Path) -> Result<Vec<ImageEntry>> {
+fn parse_images(f: &ModelFile) -> Result<Vec<ImageEntry>> {
+    let what = f.what;
     let mut out = Vec::new();
-    let txt = dir.join("images.txt");
-    if txt.exists() {
-        let what = txt.display().to_string();
-        let text = std::fs::read_to_string(&txt).with_context(|| format!("{what}: cannot read"))?;
+    if f.text {
         // Two lines per image; the second (points) may be empty, so count non-comment lines strictly.
-        let lines: Vec<(usize, &str)> = text.lines().enumerate().filter(|(_, l)| !l.starts_with('#')).collect();
+        let lines: Vec<(usize, &str)> =
+            text(f.data, what)?.lines().enumerate().filter(|(_, l)| !l.starts_with('#')).collect();
         let mut i = 0;
         while i < lines.len() {
             let (ln, line) = lines[i];
@@ -211,18 +245,15 @@ fn read_images(dir: &Path) -> Result<Vec<ImageEntry>> {
             i += 2; // skip the points line
         }
     } else {
-        let path = dir.join("images.bin");
-        let what = path.display().to_string();
-        let data = read_bytes(&path)?;
-        let mut b = Bin { data: &data, pos: 0, what: &what };
-        let n = b.u64()?;
+        let mut b = Bin { data: f.data, pos: 0, what };
+        let n = b.count(64)?;
         for _ in 0..n {
             let _id = b.i32()?;
             let qvec = [b.f64()?, b.f64()?, b.f64()?, b.f64()?];
             let tvec = [b.f64()?, b.f64()?, b.f64()?];
             let camera_id = b.i32()? as i64;
             let name = b.string()?;
-            let np = b.u64()? as usize;
+            let np = b.count(24)?;
             b.take(np * 24)?;
             out.push(ImageEntry { name, qvec, tvec, camera_id });
         }
@@ -230,14 +261,11 @@ fn read_images(dir: &Path) -> Result<Vec<ImageEntry>> {
     Ok(out)
 }
 
-fn read_points(dir: &Path) -> Result<Vec<Point3D>> {
-    let txt = dir.join("points3D.txt");
-    let bin = dir.join("points3D.bin");
+fn parse_points(f: &ModelFile) -> Result<Vec<Point3D>> {
+    let what = f.what;
     let mut out = Vec::new();
-    if txt.exists() {
-        let what = txt.display().to_string();
-        let text = std::fs::read_to_string(&txt).with_context(|| format!("{what}: cannot read"))?;
-        for (ln, line) in text.lines().enumerate() {
+    if f.text {
+        for (ln, line) in text(f.data, what)?.lines().enumerate() {
             let line = line.trim();
             if line.is_empty() || line.starts_with('#') {
                 continue;
@@ -247,22 +275,23 @@ fn read_points(dir: &Path) -> Result<Vec<Point3D>> {
                 bail!("{what}:{}: expected POINT3D_ID X Y Z R G B ...", ln + 1);
             }
             let err = || anyhow!("{what}:{}: unparsable point", ln + 1);
-            let f = |s: &str| s.parse::<f64>().map_err(|_| err());
+            let f = |s: &str| s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(err);
             let u = |s: &str| s.parse::<u8>().map_err(|_| err());
             out.push(Point3D { xyz: [f(w[1])?, f(w[2])?, f(w[3])?], rgb: [u(w[4])?, u(w[5])?, u(w[6])?] });
         }
-    } else if bin.exists() {
-        let what = bin.display().to_string();
-        let data = read_bytes(&bin)?;
-        let mut b = Bin { data: &data, pos: 0, what: &what };
-        let n = b.u64()?;
-        for _ in 0..n {
+    } else {
+        let mut b = Bin { data: f.data, pos: 0, what };
+        let n = b.count(43)?;
+        for i in 0..n {
             b.u64()?;
             let xyz = [b.f64()?, b.f64()?, b.f64()?];
+            if !xyz.iter().all(|v| v.is_finite()) {
+                bail!("{what}: point {i} has a NaN or infinite coordinate");
+            }
             let c = b.take(3)?;
             let rgb = [c[0], c[1], c[2]];
             b.f64()?;
-            let track = b.u64()? as usize;
+            let track = b.count(8)?;
             b.take(track * 8)?;
             out.push(Point3D { xyz, rgb });
         }
@@ -270,25 +299,57 @@ fn read_points(dir: &Path) -> Result<Vec<Point3D>> {
     Ok(out)
 }
 
+/// Reads `<stem>.txt` (preferred) or `<stem>.bin` from `dir`; None when neither exists.
+fn read_model_file(dir: &Path, stem: &str) -> Result<Option<(Vec<u8>, bool, String)>> {
+    for (ext, text) in [("txt", true), ("bin", false)] {
+        let path = dir.join(format!("{stem}.{ext}"));
+        if path.exists() {
+            return Ok(Some((read_bytes(&path)?, text, path.display().to_string())));
+        }
+    }
+    Ok(None)
+}
+
 /// Loads a COLMAP model from `dir` (or `dir/sparse/0`). Cameras come sorted by image name; their
 /// names drop the file extension.
 pub fn read_colmap(dir: &Path) -> Result<ColmapModel> {
     let model_dir = find_model_dir(dir)?;
+    let missing = |stem: &str| anyhow!("{}: no {stem}.txt or {stem}.bin", model_dir.display());
+    let cameras = read_model_file(&model_dir, "cameras")?.ok_or_else(|| missing("cameras"))?;
+    let images = read_model_file(&model_dir, "images")?.ok_or_else(|| missing("images"))?;
+    let points = read_model_file(&model_dir, "points3D")?;
+    fn file(f: &(Vec<u8>, bool, String)) -> ModelFile<'_> {
+        ModelFile { data: &f.0, text: f.1, what: &f.2 }
+    }
+    parse_colmap(&file(&cameras), &file(&images), points.as_ref().map(file).as_ref(), &model_dir.display().to_string())
+}
+
+/// Builds a model from the bytes of its files (`what` names the model in errors): the reader of
+/// `read_colmap`, on memory so that it can be fuzzed.
+pub fn parse_colmap(
+    cameras: &ModelFile,
+    images: &ModelFile,
+    points: Option<&ModelFile>,
+    what: &str,
+) -> Result<ColmapModel> {
     let mut warnings = Vec::new();
-    let intrinsics = read_cameras(&model_dir, &mut warnings)?;
-    let mut images = read_images(&model_dir)?;
+    let intrinsics = parse_cameras(cameras, &mut warnings)?;
+    let mut images = parse_images(images)?;
     if images.is_empty() {
-        bail!("{}: the COLMAP model has no images", model_dir.display());
+        bail!("{what}: the COLMAP model has no images");
     }
     images.sort_by(|a, b| a.name.cmp(&b.name));
+    if let Some(w) = images.windows(2).find(|w| w[0].name == w[1].name) {
+        bail!("{what}: image {:?} appears twice", w[0].name);
+    }
     let cameras = images
         .iter()
         .map(|im| {
-            let k = intrinsics.get(&im.camera_id).ok_or_else(|| {
-                anyhow!("{}: image {:?} refers to missing camera {}", model_dir.display(), im.name, im.camera_id)
-            })?;
+            let k = intrinsics
+                .get(&im.camera_id)
+                .ok_or_else(|| anyhow!("{what}: image {:?} refers to missing camera {}", im.name, im.camera_id))?;
             let stem = Path::new(&im.name).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            Ok(Camera {
+            let camera = Camera {
                 name: stem,
                 width: k.width,
                 height: k.height,
@@ -298,9 +359,11 @@ pub fn read_colmap(dir: &Path) -> Result<ColmapModel> {
                 cy: k.cy,
                 rotation: rotation_from_qvec(im.qvec),
                 translation: im.tvec,
-            })
+            };
+            camera.check(&format!("{what}: image {:?}", im.name))?;
+            Ok(camera)
         })
         .collect::<Result<Vec<_>>>()?;
-    let points = read_points(&model_dir)?;
+    let points = points.map(parse_points).transpose()?.unwrap_or_default();
     Ok(ColmapModel { cameras, points, warnings })
 }

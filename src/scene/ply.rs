@@ -213,7 +213,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
                     } else if let Some(i) = idx("f_rest_").filter(|&i| i < n_rest) {
                         Slot::Rest(i)
                     } else {
-                        extras.push(ExtraProperty { name: name.clone(), ty: *ty, values: Vec::with_capacity(n) });
+                        extras.push(ExtraProperty { name: name.clone(), ty: *ty, values: Vec::new() });
                         Slot::Extra(extras.len() - 1)
                     }
                 }
@@ -221,15 +221,27 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
         })
         .collect();
 
+    // The header's count is a claim: storage grows with the rows actually read (in blocks of at
+    // most ROWS), so a header claiming 2^40 vertices fails at the end of the data, not in malloc.
+    const ROWS: usize = 4096;
     let mut scene = GaussianScene {
-        means: vec![[0.0; 3]; n],
-        normals: vec![[0.0; 3]; n],
-        log_scales: vec![[0.0; 3]; n],
-        quats: vec![[0.0; 4]; n],
-        opacity_logits: vec![0.0; n],
+        means: Vec::new(),
+        normals: Vec::new(),
+        log_scales: Vec::new(),
+        quats: Vec::new(),
+        opacity_logits: Vec::new(),
         sh_degree,
-        sh: vec![0.0; n * k * 3],
+        sh: Vec::new(),
         extras,
+    };
+    let grow = |scene: &mut GaussianScene, rows: usize| {
+        let len = scene.means.len() + rows;
+        scene.means.resize(len, [0.0; 3]);
+        scene.normals.resize(len, [0.0; 3]);
+        scene.log_scales.resize(len, [0.0; 3]);
+        scene.quats.resize(len, [0.0; 4]);
+        scene.opacity_logits.resize(len, 0.0);
+        scene.sh.resize(len * k * 3, 0.0);
     };
     let store = |scene: &mut GaussianScene, i: usize, slot: &Slot, v: f64| match *slot {
         Slot::Mean(c) => scene.means[i][c] = v as f32,
@@ -249,9 +261,14 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
     match format {
         Format::Ascii => {
             let mut text = String::new();
-            reader.read_to_string(&mut text).with_context(|| format!("{what}: read error"))?;
+            reader
+                .read_to_string(&mut text)
+                .with_context(|| format!("{what}: read error (an ascii PLY must be UTF-8 text)"))?;
             let mut tokens = text.split_ascii_whitespace();
             for i in 0..n {
+                if i % ROWS == 0 {
+                    grow(&mut scene, (n - i).min(ROWS));
+                }
                 for (j, slot) in slots.iter().enumerate() {
                     let tok = tokens
                         .next()
@@ -279,10 +296,10 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
                     Some(cur)
                 })
                 .collect();
-            let mut buf = vec![0u8; stride * 4096];
+            let mut buf = vec![0u8; stride * n.min(ROWS)];
             let mut i = 0;
             while i < n {
-                let rows = (n - i).min(4096);
+                let rows = (n - i).min(ROWS);
                 let chunk = &mut buf[..rows * stride];
                 if let Err(e) = reader.read_exact(chunk) {
                     if e.kind() == std::io::ErrorKind::UnexpectedEof {
@@ -290,6 +307,7 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
                     }
                     return Err(e).with_context(|| format!("{what}: read error"));
                 }
+                grow(&mut scene, rows);
                 for r in 0..rows {
                     let row = &chunk[r * stride..(r + 1) * stride];
                     for (j, slot) in slots.iter().enumerate() {

@@ -31,9 +31,18 @@ impl LabelMaps {
 }
 
 fn read_gray(path: &Path, width: u32, height: u32) -> Result<Vec<u8>> {
-    let img = image::open(path).with_context(|| format!("{}: cannot read mask", path.display()))?;
-    let img = img.to_luma8();
+    let data = std::fs::read(path).with_context(|| format!("{}: cannot read mask", path.display()))?;
+    decode_mask(&data, &path.display().to_string(), width, height)
+}
+
+/// A mask or label image's bytes as one 8-bit channel at `width` x `height` (nearest-neighbour
+/// resized when its own size differs). `what` names the file in errors.
+pub fn decode_mask(data: &[u8], what: &str, width: u32, height: u32) -> Result<Vec<u8>> {
+    let img = crate::io::decode_image(data, what)?.to_luma8();
     let (w, h) = img.dimensions();
+    if w == 0 || h == 0 {
+        bail!("{what}: the mask is empty ({w}x{h})");
+    }
     if (w, h) == (width, height) {
         return Ok(img.into_raw());
     }

@@ -43,6 +43,28 @@ fn output_index(m: &Model, name: &str) -> Result<usize> {
         .ok_or_else(|| anyhow!("{}: no output named {name:?} (outputs: {:?})", m.path().display(), m.output_names()))
 }
 
+/// The embeddings of `prompts`, in order, from a prompt-embeddings JSON's bytes (an object of
+/// prompt -> list of numbers, all of one length): the rows and their length. `what` names the file.
+pub fn parse_prompt_embeddings(data: &[u8], what: &str, prompts: &[String]) -> Result<(Vec<f32>, usize)> {
+    let table: std::collections::BTreeMap<String, Vec<f32>> = serde_json::from_slice(data)
+        .with_context(|| format!("{what}: expected a JSON object of prompt -> list of numbers"))?;
+    let mut rows = Vec::new();
+    let mut dim = None;
+    for p in prompts {
+        let e = table.get(p).ok_or_else(|| {
+            anyhow!("{what}: no embedding for prompt {p:?} (has: {:?})", table.keys().collect::<Vec<_>>())
+        })?;
+        if *dim.get_or_insert(e.len()) != e.len() || e.is_empty() {
+            bail!("{what}: embeddings of different or zero length");
+        }
+        if let Some(v) = e.iter().find(|v| !v.is_finite()) {
+            bail!("{what}: the embedding of {p:?} holds {v}, not a finite number");
+        }
+        rows.extend_from_slice(e);
+    }
+    Ok((rows, dim.unwrap_or(0)))
+}
+
 impl PromptSegmenter {
     pub fn load(
         detector: &Path,
@@ -54,26 +76,9 @@ impl PromptSegmenter {
         if prompts.is_empty() {
             bail!("no prompts");
         }
-        let text = std::fs::read_to_string(embeddings)
+        let data = std::fs::read(embeddings)
             .with_context(|| format!("{}: cannot read the prompt embeddings", embeddings.display()))?;
-        let table: std::collections::BTreeMap<String, Vec<f32>> = serde_json::from_str(&text).with_context(|| {
-            format!("{}: expected a JSON object of prompt -> list of numbers", embeddings.display())
-        })?;
-        let mut data = Vec::new();
-        let mut dim = None;
-        for p in prompts {
-            let e = table.get(p).ok_or_else(|| {
-                anyhow!(
-                    "{}: no embedding for prompt {p:?} (has: {:?})",
-                    embeddings.display(),
-                    table.keys().collect::<Vec<_>>()
-                )
-            })?;
-            if *dim.get_or_insert(e.len()) != e.len() || e.is_empty() {
-                bail!("{}: embeddings of different or zero length", embeddings.display());
-            }
-            data.extend_from_slice(e);
-        }
+        let (data, dim) = parse_prompt_embeddings(&data, &embeddings.display().to_string(), prompts)?;
         let detector = Model::load(detector)?;
         detector.expect("detector", &["image", "text_embeds"], 2)?;
         output_index(&detector, "boxes")?;
@@ -85,7 +90,7 @@ impl PromptSegmenter {
             detector,
             segmenter,
             prompts: prompts.to_vec(),
-            embeddings: Tensor::new(vec![prompts.len() as i64, dim.unwrap() as i64], data),
+            embeddings: Tensor::new(vec![prompts.len() as i64, dim as i64], data),
             box_threshold,
         })
     }

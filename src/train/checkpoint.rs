@@ -77,8 +77,8 @@ pub fn load(out: &Path) -> Result<Option<Checkpoint>> {
         }
         let n = u64::from_le_bytes(bytes[pos..pos + 8].try_into().unwrap()) as usize;
         pos += 8;
-        if pos + 8 * n > bytes.len() {
-            bail!("{}: truncated moments.bin", dir.display());
+        if n > (bytes.len() - pos) / 8 {
+            bail!("{}: truncated moments.bin (a group claims {n} moments)", dir.display());
         }
         let m: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes[pos..pos + 4 * n]);
         let v: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes[pos + 4 * n..pos + 8 * n]);

@@ -37,7 +37,7 @@ pub fn find_image(dir: &Path, stem: &str) -> Option<PathBuf> {
 
 /// Loads an image as planar RGB floats in [0, 1].
 pub fn load_rgb(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
-    let img = image::open(path).with_context(|| format!("{}: cannot read image", path.display()))?.to_rgb8();
+    let img = crate::io::read_image(path)?.to_rgb8();
     let (w, h) = img.dimensions();
     let hw = (w * h) as usize;
     let mut out = vec![0f32; 3 * hw];
