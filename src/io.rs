@@ -10,8 +10,26 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-/// Writes through `body` into a temporary file, syncs it and renames it onto `path`.
+/// Removes the temporary files that killed writers of `path` left beside it: `.{name}.{pid}.tmp`
+/// whose process is gone (a live pid, even a reused one, keeps its file).
+fn sweep_stale_temps(path: &Path) {
+    let (Some(dir), Some(name)) = (path.parent(), path.file_name()) else { return };
+    let dir = if dir.as_os_str().is_empty() { Path::new(".") } else { dir };
+    let prefix = format!(".{}.", name.to_string_lossy());
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let Some(pid) = file.strip_prefix(&prefix).and_then(|r| r.strip_suffix(".tmp")) else { continue };
+        if pid.parse::<u32>().is_ok_and(|p| p != std::process::id() && !Path::new(&format!("/proc/{p}")).exists()) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
+/// Writes through `body` into a temporary file, syncs it and renames it onto `path`. On any
+/// error (a full disk included) the temporary file is removed and `path` keeps its old content.
 pub fn write_atomic(path: &Path, body: impl FnOnce(&mut BufWriter<std::fs::File>) -> Result<()>) -> Result<()> {
+    sweep_stale_temps(path);
     let tmp = temp_path(path);
     let result = (|| -> Result<()> {
         let file = std::fs::File::create(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;

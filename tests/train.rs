@@ -117,7 +117,7 @@ fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
     use cogeo::train::dataset::{Dataset, View};
     use cogeo::train::trainer::{Frozen, TrainConfig, Trainer};
     let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
-    let gpu = Gpu::new(&DeviceChoice { selector: None, validate }).unwrap();
+    let gpu = Gpu::new(&DeviceChoice { selector: None, validate, memory_limit_mib: None }).unwrap();
     let mut rng = Rng::new(4);
     let mut scene = GaussianScene { sh_degree: 1, ..Default::default() };
     for _ in 0..300 {

@@ -1,7 +1,7 @@
 //! Argument groups and helpers shared by several subcommands: the device, the capture's
 //! resolution, colors, progress bars, scene loading.
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use cogeo::gpu::{DeviceChoice, Gpu};
 use cogeo::scene::{ply, GaussianScene};
@@ -14,6 +14,11 @@ pub struct DeviceArgs {
     /// Default: COGEO_DEVICE, else the first discrete GPU, then integrated, then CPU (lavapipe).
     #[arg(long, global = true)]
     pub device: Option<String>,
+    /// Use at most this many MiB of device memory (for a GPU shared with other jobs); work that
+    /// needs more stops with the sizes and the device named. Default: COGEO_MAX_DEVICE_MEMORY_MIB,
+    /// else all of the device's local memory.
+    #[arg(long, global = true, value_name = "MIB")]
+    pub max_device_memory: Option<f64>,
 }
 
 /// Resolution at which a capture is used (train, tag, remove and run share it).
@@ -40,7 +45,32 @@ pub fn progress(len: usize, what: &str) -> ProgressBar {
 }
 
 pub fn open_gpu(device: &DeviceArgs) -> Result<Gpu> {
-    Gpu::new(&DeviceChoice::from_env(device.device.clone()))
+    let mut choice = DeviceChoice::from_env(device.device.clone());
+    choice.memory_limit_mib = device.max_device_memory.or(choice.memory_limit_mib);
+    Gpu::new(&choice)
+}
+
+/// Creates an output folder early (so a folder that cannot be made fails before the work), and
+/// removes it again if the command ends while it is still empty (a failure before any output), so
+/// that a failed run leaves no folder behind. Keep the guard alive for the whole command.
+pub struct OutputFolder {
+    path: Option<std::path::PathBuf>,
+}
+
+impl OutputFolder {
+    pub fn create(path: &Path) -> Result<OutputFolder> {
+        let created = !path.exists();
+        std::fs::create_dir_all(path).with_context(|| format!("{}: cannot create output folder", path.display()))?;
+        Ok(OutputFolder { path: created.then(|| path.to_path_buf()) })
+    }
+}
+
+impl Drop for OutputFolder {
+    fn drop(&mut self) {
+        if let Some(p) = &self.path {
+            let _ = std::fs::remove_dir(p); // only succeeds while empty
+        }
+    }
 }
 
 pub fn load_scene(path: &Path) -> Result<GaussianScene> {

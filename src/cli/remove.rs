@@ -248,7 +248,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         let exemplar = cogeo::removal::complete::exemplar::ExemplarFill::new(&gpu, f.seed)?;
         completer.inpainter = Inpainter::Exemplar(Box::new(exemplar));
     }
-    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    let _folder = super::args::OutputFolder::create(&a.out)?;
     eprintln!(
         "removing label(s) {labels:?} from {} Gaussians; editing {} views on {}",
         scene.len(),

@@ -2,7 +2,7 @@
 //! labels on request.
 
 use super::args::{load_scene, open_gpu, parse_rgb, progress, DeviceArgs};
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use cogeo::gpu::Gpu;
 use cogeo::io::{write_exr, write_png_gray, write_png_rgb};
@@ -155,7 +155,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         None
     };
     let gpu = open_gpu(&a.device)?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
+    let _folder = super::args::OutputFolder::create(&a.out)?;
     let settings = RenderSettings {
         background: a.background,
         near: a.near,

@@ -207,6 +207,9 @@ pub fn run(a: TagArgs) -> Result<()> {
         "classifier": tagged.classifier,
         "held_out": held_out,
     });
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create output folder", dir.display()))?;
+    }
     ply::write_ply(&out_scene, &a.out)?;
     let sidecar = a.out.with_extension("json");
     cogeo::io::write_atomic(&sidecar, |w| {

@@ -70,7 +70,6 @@ pub fn run(a: TrainArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     let gpu = open_gpu(&a.device)?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
     let densify_until = a.densify_until.unwrap_or_else(|| (a.iters / 2).min(15_000));
     let cfg = trainer::TrainConfig {
         iters: a.iters,
@@ -96,6 +95,8 @@ pub fn run(a: TrainArgs) -> Result<()> {
         None => trainer::init_from_points(&data.points, a.sh_degree)?,
     };
     let mut t = trainer::Trainer::new(&gpu, &data, &scene, cfg)?;
+    // the folder appears once the inputs are read and the device memory is taken
+    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
     if let Some(c) = &resumed {
         t.set_step(c.step);
         t.load_moments(&c.moments)?;

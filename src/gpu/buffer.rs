@@ -5,6 +5,7 @@ use anyhow::{anyhow, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
 /// Where a buffer lives.
@@ -41,6 +42,37 @@ impl Buffer {
                 info.max_memory_allocation >> 20
             ));
         }
+        // the device's (or the user's) memory budget, checked before asking the driver, which on
+        // lavapipe would take host memory until the machine swaps
+        let in_use = shared.memory_in_use.fetch_add(size, Ordering::Relaxed);
+        if in_use + size > shared.memory_limit {
+            shared.memory_in_use.fetch_sub(size, Ordering::Relaxed);
+            let limit = if shared.memory_limit_set {
+                format!(
+                    ", of which cogeo may use {:.2} MiB (--max-device-memory)",
+                    shared.memory_limit as f64 / (1 << 20) as f64
+                )
+            } else {
+                String::new()
+            };
+            return Err(anyhow!(
+                "out of GPU memory: buffer {name:?} needs {:.2} MiB with {:.2} MiB already in use; {} has {} MiB of device memory{limit}",
+                size as f64 / (1 << 20) as f64,
+                in_use as f64 / (1 << 20) as f64,
+                info.name,
+                info.device_local_memory >> 20
+            ));
+        }
+        let result = Self::create(gpu, name, size, kind);
+        if result.is_err() {
+            shared.memory_in_use.fetch_sub(size, Ordering::Relaxed);
+        }
+        result
+    }
+
+    fn create(gpu: &Gpu, name: &str, size: u64, kind: MemoryKind) -> Result<Buffer> {
+        let shared = &gpu.shared;
+        let info = &shared.info;
         let device = &shared.device;
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
@@ -181,6 +213,7 @@ impl Buffer {
 
 impl Drop for Buffer {
     fn drop(&mut self) {
+        self.gpu.memory_in_use.fetch_sub(self.size, Ordering::Relaxed);
         unsafe { self.gpu.device.destroy_buffer(self.buffer, None) };
         if let Some(a) = self.allocation.take() {
             let _ = self.gpu.allocator.lock().unwrap().free(a);

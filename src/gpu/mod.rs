@@ -76,6 +76,11 @@ pub(crate) struct GpuShared {
     pub(crate) submit_lock: Mutex<()>,
     /// Host round trips so far: each a point where the host waits for the device.
     pub(crate) round_trips: RoundTripCounters,
+    /// Bytes of buffers alive now, and the most this context may hold (the device's local memory,
+    /// or less when the user set a limit; `memory_limit_set` says which).
+    pub(crate) memory_in_use: AtomicU64,
+    pub(crate) memory_limit: u64,
+    pub(crate) memory_limit_set: bool,
 }
 
 /// Counts of the host's waits on the device, so benches can report them per iteration.
@@ -119,6 +124,9 @@ pub struct DeviceChoice {
     pub selector: Option<String>,
     /// Enable the Khronos validation layer (also `COGEO_VALIDATE=1`).
     pub validate: bool,
+    /// Use at most this many MiB of device memory (a GPU shared with other jobs; also
+    /// `COGEO_MAX_DEVICE_MEMORY_MIB`). None: all of the device's local memory.
+    pub memory_limit_mib: Option<f64>,
 }
 
 impl DeviceChoice {
@@ -126,7 +134,8 @@ impl DeviceChoice {
     pub fn from_env(selector: Option<String>) -> Self {
         let selector = selector.or_else(|| std::env::var("COGEO_DEVICE").ok().filter(|s| !s.is_empty()));
         let validate = std::env::var("COGEO_VALIDATE").map(|v| v == "1" || v == "true").unwrap_or(false);
-        DeviceChoice { selector, validate }
+        let memory_limit_mib = std::env::var("COGEO_MAX_DEVICE_MEMORY_MIB").ok().and_then(|v| v.parse().ok());
+        DeviceChoice { selector, validate, memory_limit_mib }
     }
 }
 
@@ -401,6 +410,10 @@ impl Gpu {
         })
         .context("cannot create the GPU memory allocator")?;
 
+        let memory_limit = match choice.memory_limit_mib {
+            Some(mib) => ((mib.max(0.0) * (1 << 20) as f64) as u64).min(info.device_local_memory),
+            None => info.device_local_memory,
+        };
         Ok(Gpu {
             shared: Arc::new(GpuShared {
                 _entry: entry,
@@ -413,6 +426,9 @@ impl Gpu {
                 info,
                 submit_lock: Mutex::new(()),
                 round_trips: RoundTripCounters::default(),
+                memory_in_use: AtomicU64::new(0),
+                memory_limit,
+                memory_limit_set: choice.memory_limit_mib.is_some(),
             }),
         })
     }

@@ -33,7 +33,7 @@ impl Drop for TestGpu {
 /// Validation is on unless COGEO_VALIDATE=0 is set explicitly.
 pub fn gpu() -> TestGpu {
     let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
-    let choice = DeviceChoice { selector: std::env::var("COGEO_DEVICE").ok(), validate };
+    let choice = DeviceChoice { selector: std::env::var("COGEO_DEVICE").ok(), validate, memory_limit_mib: None };
     let gpu = Gpu::new(&choice).expect("cannot create the Vulkan context (is lavapipe installed?)");
     if validate {
         assert!(gpu.validating());
