@@ -26,8 +26,47 @@ fn sweep_stale_temps(path: &Path) {
     }
 }
 
-/// Writes through `body` into a temporary file, syncs it and renames it onto `path`. On any
-/// error (a full disk included) the temporary file is removed and `path` keeps its old content.
+/// Finished temporary files waiting for the open output batch's commit: (temporary, target).
+static BATCH: std::sync::Mutex<Option<Vec<(PathBuf, PathBuf)>>> = std::sync::Mutex::new(None);
+
+/// The outputs of one command, made to appear together: while a batch is open, `write_atomic`
+/// leaves each finished (synced) file under its temporary name, and `commit` renames them all into
+/// place. Whatever fails before the commit (a full disk on the last file, a device error) leaves
+/// every previous output as it was, and the batch, dropped uncommitted, deletes its temporaries.
+/// One batch per process (a command), opened after the command last reads its own outputs.
+pub struct OutputBatch {
+    committed: bool,
+}
+
+impl OutputBatch {
+    pub fn begin() -> OutputBatch {
+        *BATCH.lock().unwrap() = Some(Vec::new());
+        OutputBatch { committed: false }
+    }
+
+    /// Renames every file of the batch into place, in the order they were written.
+    pub fn commit(mut self) -> Result<()> {
+        self.committed = true;
+        for (tmp, path) in BATCH.lock().unwrap().take().unwrap_or_default() {
+            std::fs::rename(&tmp, &path).with_context(|| format!("{}: cannot move into place", path.display()))?;
+        }
+        Ok(())
+    }
+}
+
+impl Drop for OutputBatch {
+    fn drop(&mut self) {
+        if let Some(list) = BATCH.lock().unwrap().take() {
+            for (tmp, _) in list {
+                let _ = std::fs::remove_file(tmp);
+            }
+        }
+    }
+}
+
+/// Writes through `body` into a temporary file, syncs it and renames it onto `path` (at once, or
+/// at the commit of an open `OutputBatch`). On any error (a full disk included) the temporary
+/// file is removed and `path` keeps its old content.
 pub fn write_atomic(path: &Path, body: impl FnOnce(&mut BufWriter<std::fs::File>) -> Result<()>) -> Result<()> {
     sweep_stale_temps(path);
     let tmp = temp_path(path);
@@ -37,6 +76,12 @@ pub fn write_atomic(path: &Path, body: impl FnOnce(&mut BufWriter<std::fs::File>
         body(&mut w)?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
+        if let Some(batch) = BATCH.lock().unwrap().as_mut() {
+            if !batch.iter().any(|(t, _)| *t == tmp) {
+                batch.push((tmp.clone(), path.to_path_buf()));
+            }
+            return Ok(());
+        }
         std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot move into place", path.display()))?;
         Ok(())
     })();

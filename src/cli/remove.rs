@@ -282,6 +282,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     // outputs: edited views, then held-out views before / after
     let out = &a.out;
     let v = &removal.views;
+    let batch = cogeo::io::OutputBatch::begin();
     write_views(&out.join("before"), &cameras, &v.iter().map(|x| x.before.clone()).collect::<Vec<_>>())?;
     write_views(&out.join("after"), &cameras, &v.iter().map(|x| x.after.clone()).collect::<Vec<_>>())?;
     write_views(&out.join("removed"), &cameras, &v.iter().map(|x| x.removed.clone()).collect::<Vec<_>>())?;
@@ -343,6 +344,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         serde_json::to_writer_pretty(&mut *w, &report)?;
         Ok(())
     })?;
+    batch.commit()?;
     let bg = report["background_psnr_vs_original"]["mean"].as_f64().unwrap_or(f64::NAN);
     let gt = synth
         .map(|m| format!("; held-out masked PSNR vs ground truth {:.2} dB (SSIM {:.3})", m.masked_psnr, m.masked_ssim))

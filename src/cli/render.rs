@@ -163,6 +163,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         features: a.features,
         timestamps: a.timings,
     };
+    let batch = cogeo::io::OutputBatch::begin();
     render_views(&gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings)?;
     if a.builtin {
         ply::write_ply(&scene, &a.out.join("scene.ply"))?;
@@ -182,6 +183,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             )?;
         }
     }
+    batch.commit()?;
     eprintln!("wrote {} view(s) to {}", cameras.len(), a.out.display());
     Ok(())
 }

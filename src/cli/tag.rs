@@ -210,12 +210,14 @@ pub fn run(a: TagArgs) -> Result<()> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create output folder", dir.display()))?;
     }
+    let batch = cogeo::io::OutputBatch::begin();
     ply::write_ply(&out_scene, &a.out)?;
     let sidecar = a.out.with_extension("json");
     cogeo::io::write_atomic(&sidecar, |w| {
         serde_json::to_writer_pretty(&mut *w, &report)?;
         Ok(())
     })?;
+    batch.commit()?;
     let miou = held_out
         .as_ref()
         .map(|h| format!("; held-out mIoU {:.3}", h["miou"].as_f64().unwrap_or(0.0)))

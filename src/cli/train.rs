@@ -143,7 +143,6 @@ pub fn run(a: TrainArgs) -> Result<()> {
     bar.finish();
     let seconds = start.elapsed().as_secs_f64();
     let scene = t.download_scene()?;
-    ply::write_ply(&scene, &a.out.join("scene.ply"))?;
     checkpoint::save(&t, &a.out)?;
     let test = t.evaluate(&data.test)?;
     let train = t.evaluate(&data.train)?;
@@ -157,10 +156,13 @@ pub fn run(a: TrainArgs) -> Result<()> {
         "device": gpu.info().name,
     });
     let text = serde_json::to_string_pretty(&report)?;
+    let batch = cogeo::io::OutputBatch::begin();
+    ply::write_ply(&scene, &a.out.join("scene.ply"))?;
     cogeo::io::write_atomic(&a.out.join("metrics.json"), |w| {
         use std::io::Write;
         w.write_all(text.as_bytes()).map_err(Into::into)
     })?;
+    batch.commit()?;
     eprintln!(
         "done: {} Gaussians; test PSNR {:.2} dB SSIM {:.4} ({} views); train PSNR {:.2}; {:.1} it/s; wrote {}",
         scene.len(),

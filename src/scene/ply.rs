@@ -296,10 +296,12 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
                     Some(cur)
                 })
                 .collect();
-            let mut buf = vec![0u8; stride * n.min(ROWS)];
+            // rows per read: ROWS, fewer for very wide rows (the read buffer stays near 1 MiB)
+            let block = ROWS.min((1 << 20) / stride.max(1)).max(1);
+            let mut buf = vec![0u8; stride * n.min(block)];
             let mut i = 0;
             while i < n {
-                let rows = (n - i).min(ROWS);
+                let rows = (n - i).min(block);
                 let chunk = &mut buf[..rows * stride];
                 if let Err(e) = reader.read_exact(chunk) {
                     if e.kind() == std::io::ErrorKind::UnexpectedEof {

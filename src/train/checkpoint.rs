@@ -23,6 +23,22 @@ pub fn save(trainer: &Trainer, out: &Path) -> Result<()> {
     let (dir, tmp, old) = dirs(out);
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).with_context(|| format!("{}: cannot create", tmp.display()))?;
+    let written = write_files(trainer, &tmp);
+    if written.is_err() {
+        let _ = std::fs::remove_dir_all(&tmp); // a full disk: the previous checkpoint stays alone
+    }
+    written?;
+    // swap: checkpoint -> checkpoint.old, checkpoint.tmp -> checkpoint, drop the old one
+    let _ = std::fs::remove_dir_all(&old);
+    if dir.exists() {
+        std::fs::rename(&dir, &old)?;
+    }
+    std::fs::rename(&tmp, &dir)?;
+    let _ = std::fs::remove_dir_all(&old);
+    Ok(())
+}
+
+fn write_files(trainer: &Trainer, tmp: &Path) -> Result<()> {
     ply::write_ply(&trainer.download_scene()?, &tmp.join("scene.ply"))?;
     let moments = trainer.moments_host()?;
     crate::io::write_atomic(&tmp.join("moments.bin"), |w| {
@@ -34,15 +50,7 @@ pub fn save(trainer: &Trainer, out: &Path) -> Result<()> {
         Ok(())
     })?;
     let state = serde_json::to_string_pretty(&State { step: trainer.step, config: trainer.cfg.clone() })?;
-    crate::io::write_atomic(&tmp.join("state.json"), |w| w.write_all(state.as_bytes()).map_err(Into::into))?;
-    // swap: checkpoint -> checkpoint.old, checkpoint.tmp -> checkpoint, drop the old one
-    let _ = std::fs::remove_dir_all(&old);
-    if dir.exists() {
-        std::fs::rename(&dir, &old)?;
-    }
-    std::fs::rename(&tmp, &dir)?;
-    let _ = std::fs::remove_dir_all(&old);
-    Ok(())
+    crate::io::write_atomic(&tmp.join("state.json"), |w| w.write_all(state.as_bytes()).map_err(Into::into))
 }
 
 /// A loaded checkpoint: the scene, the step it reached, and the optimizer moments.
