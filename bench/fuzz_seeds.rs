@@ -16,7 +16,7 @@ fn ply_seed(format: &str, sh_degree: usize, n: usize, extras: &[(&str, &str)], s
     let mut rng = Rng::new(salt);
     let mut props: Vec<(String, &str)> = ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"]
         .iter()
-        .map(|p| (p.to_string(), if salt % 3 == 0 { "double" } else { "float" }))
+        .map(|p| (p.to_string(), if salt.is_multiple_of(3) { "double" } else { "float" }))
         .collect();
     let rest = [0, 9, 24, 45][sh_degree];
     props.extend((0..rest).map(|i| (format!("f_rest_{i}"), "float")));
@@ -101,12 +101,17 @@ pub fn ply_seeds() -> Vec<Seed> {
     ]
 }
 
+/// A seed camera: id, model name, model id, width, height, parameters.
+type SeedCamera = (i32, &'static str, i32, u64, u64, &'static [f64]);
+/// A seed image: id, quaternion, translation, camera id, file name.
+type SeedImage = (i32, [f64; 4], [f64; 3], i32, &'static str);
+
 /// COLMAP seeds: two cameras (PINHOLE, OPENCV), three images, four points; text and binary.
-const CAMERAS: [(i32, &str, i32, u64, u64, &[f64]); 2] = [
+const CAMERAS: [SeedCamera; 2] = [
     (1, "PINHOLE", 1, 64, 48, &[60.0, 61.0, 32.0, 24.0]),
     (2, "OPENCV", 4, 32, 24, &[30.0, 30.0, 16.0, 12.0, 0.01, -0.02, 0.0, 0.0]),
 ];
-const IMAGES: [(i32, [f64; 4], [f64; 3], i32, &str); 3] = [
+const IMAGES: [SeedImage; 3] = [
     (1, [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 4.0], 1, "a.png"),
     (2, [0.9, 0.1, 0.3, 0.0], [0.5, 0.0, 4.0], 1, "b.png"),
     (3, [0.7, 0.0, 0.7, 0.1], [0.0, 0.2, 3.5], 2, "c d.jpg"),

@@ -377,7 +377,7 @@ fn mutate(family: Family, seed: &Seed, seeds: &[Seed], data: &mut Vec<u8>, rng: 
         6 | 7 if !seed.fields.is_empty() => overwrite_field(data, seed, rng),
         8 => {
             let at = below(rng, len + 1).max(keep.min(len));
-            let bad: &[u8] = pick(rng, &[&[0xff, 0xfe][..], &[0xc3], &[0xed, 0xa0, 0x80], &[0], &[b'\r']]);
+            let bad: &[u8] = pick(rng, &[&[0xff, 0xfe][..], &[0xc3], &[0xed, 0xa0, 0x80], &[0], b"\r"]);
             data.splice(at..at, bad.iter().copied());
         }
         9 => {
@@ -420,7 +420,7 @@ fn mutate_text(data: &mut Vec<u8>, keep: usize, rng: &mut Rng) {
     let mut lines: Vec<Vec<u8>> = body.split(|&b| b == b'\n').map(|l| l.to_vec()).collect();
     let n = lines.len();
     match rng.next_u64() % 6 {
-        0 | 1 | 2 => {
+        0..=2 => {
             // replace one whitespace-, comma- or bracket-delimited token
             let li = below(rng, n);
             let line = &lines[li];
@@ -433,8 +433,11 @@ fn mutate_text(data: &mut Vec<u8>, keep: usize, rng: &mut Rng) {
             if a < b && b" ,:[]{}\t".contains(&line[a]) {
                 a += 1;
             }
-            let token =
-                if rng.next_u64() % 8 == 0 { "9".repeat(1 + below(rng, 400)) } else { pick(rng, TOKENS).to_string() };
+            let token = if rng.next_u64().is_multiple_of(8) {
+                "9".repeat(1 + below(rng, 400))
+            } else {
+                pick(rng, TOKENS).to_string()
+            };
             lines[li].splice(a..b, token.bytes());
         }
         3 => {
@@ -496,7 +499,8 @@ fn mutate_json(data: &mut Vec<u8>, rng: &mut Rng) -> bool {
     ];
     let (choice, r1, r2) = (rng.next_u64() % 8, rng.next_u64() as usize, rng.next_u64() as usize);
     at_node(&mut doc, &mut k, &mut |node| edit_json(node, choice, r1, r2, &numbers));
-    *data = if rng.next_u64() % 2 == 0 { serde_json::to_vec(&doc) } else { serde_json::to_vec_pretty(&doc) }.unwrap();
+    *data = if rng.next_u64().is_multiple_of(2) { serde_json::to_vec(&doc) } else { serde_json::to_vec_pretty(&doc) }
+        .unwrap();
     true
 }
 
@@ -520,7 +524,7 @@ fn edit_json(node: &mut serde_json::Value, choice: u64, r1: usize, r2: usize, nu
             }
             Value::Array(a) if !a.is_empty() => {
                 let i = r1 % a.len();
-                if r2 % 2 == 0 {
+                if r2.is_multiple_of(2) {
                     a.remove(i);
                 } else {
                     let c = a[i].clone();

@@ -11,6 +11,7 @@ fn main() {
         // one line: the error and its causes
         let chain: Vec<String> = e.chain().map(|c| c.to_string()).collect();
         eprintln!("error: {}", chain.join(": "));
-        std::process::exit(1);
+        // `batch run` tells a scheduler whether a retry can help (cli/batch.rs)
+        std::process::exit(e.downcast_ref::<cli::batch::Exit>().map_or(1, |x| x.code()));
     }
 }

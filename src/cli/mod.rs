@@ -2,9 +2,11 @@
 //! `run`; shared argument groups in `args`.
 
 pub mod args;
+pub mod batch;
 pub mod demo;
 pub mod devices;
 pub mod eval;
+pub mod manifest;
 pub mod remove;
 pub mod render;
 pub mod run;
@@ -52,6 +54,10 @@ pub enum Command {
     /// box and the full image; with a synth dataset also never-seen / seen-elsewhere subsets,
     /// leftover, depth error and floaters; LPIPS and FID through user-supplied ONNX models).
     Eval(eval::EvalArgs),
+    /// Many scenes from one manifest, one scheduler task per scene (Slurm job array, Kubernetes
+    /// Indexed Job): `plan` validates, `run --index I` does entry I end to end and resumes after a
+    /// kill, `report` gathers metrics and timings.
+    Batch(batch::BatchArgs),
 }
 
 /// Runs a cogeo subcommand from its command line, as a user would type it.
@@ -72,5 +78,6 @@ pub fn dispatch(command: Command) -> Result<()> {
         Command::Remove(a) => remove::run(a),
         Command::Run(a) => run::run(a),
         Command::Eval(a) => eval::run(a),
+        Command::Batch(a) => batch::run(a, &run_command),
     }
 }
