@@ -21,24 +21,30 @@ if ! command -v slurmctld >/dev/null || ! command -v munged >/dev/null; then
 fi
 
 work="$(mktemp -d /tmp/cogeo-slurm.XXXXXX)"
-pids=()
+started_munged=0
+passed=0
 cleanup() {
-  for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
+  [ -n "${SLURM_CONF:-}" ] && scontrol shutdown >/dev/null 2>&1 || true
+  sleep 1
   [ -f "$work/slurmd.pid" ] && kill "$(cat "$work/slurmd.pid")" 2>/dev/null || true
   [ -f "$work/slurmctld.pid" ] && kill "$(cat "$work/slurmctld.pid")" 2>/dev/null || true
+  [ "$started_munged" = 1 ] && pkill -x munged 2>/dev/null || true
+  [ "$passed" = 1 ] && rm -rf "$work" || true
 }
 trap cleanup EXIT
 
-# munge: a key and a running daemon (the package's own when there is one)
-if ! pgrep -x munged >/dev/null; then
+# munge: a key and a running daemon (the one already serving, when there is one)
+if ! munge -n 2>/dev/null | unmunge >/dev/null 2>&1; then
   [ -f /etc/munge/munge.key ] || { mkdir -p /etc/munge; dd if=/dev/urandom bs=1 count=1024 of=/etc/munge/munge.key 2>/dev/null; }
   chown munge:munge /etc/munge/munge.key 2>/dev/null || true
   chmod 400 /etc/munge/munge.key
   mkdir -p /run/munge /var/log/munge /var/lib/munge
   chown munge:munge /run/munge /var/log/munge /var/lib/munge 2>/dev/null || true
   runuser -u munge -- /usr/sbin/munged 2>/dev/null || /usr/sbin/munged --force || skip "munged does not start"
+  started_munged=1
+  for _ in $(seq 20); do munge -n 2>/dev/null | unmunge >/dev/null 2>&1 && break; sleep 0.2; done
 fi
-munge -n | unmunge >/dev/null 2>&1 || skip "munge does not work here"
+munge -n 2>/dev/null | unmunge >/dev/null 2>&1 || skip "munge does not work here"
 
 host="$(hostname -s)"
 port=$((20000 + $$ % 20000))
@@ -144,4 +150,5 @@ echo "--- requeued task log (task 1)"
 grep -E "^cogeo-array|^batch:" "$work/task-1.log"
 echo "--- report"
 cat "$work/report.md"
-echo "slurm test: passed ($work)"
+echo "slurm test: passed"
+passed=1
