@@ -40,7 +40,9 @@ pub struct OutputBatch {
 
 impl OutputBatch {
     pub fn begin() -> OutputBatch {
-        *BATCH.lock().unwrap() = Some(Vec::new());
+        let mut batch = BATCH.lock().unwrap();
+        debug_assert!(batch.is_none(), "an output batch is already open");
+        *batch = Some(Vec::new());
         OutputBatch { committed: false }
     }
 
