@@ -34,21 +34,18 @@ static BATCH: std::sync::Mutex<Option<Vec<(PathBuf, PathBuf)>>> = std::sync::Mut
 /// place. Whatever fails before the commit (a full disk on the last file, a device error) leaves
 /// every previous output as it was, and the batch, dropped uncommitted, deletes its temporaries.
 /// One batch per process (a command), opened after the command last reads its own outputs.
-pub struct OutputBatch {
-    committed: bool,
-}
+pub struct OutputBatch(());
 
 impl OutputBatch {
     pub fn begin() -> OutputBatch {
         let mut batch = BATCH.lock().unwrap();
         debug_assert!(batch.is_none(), "an output batch is already open");
         *batch = Some(Vec::new());
-        OutputBatch { committed: false }
+        OutputBatch(())
     }
 
     /// Renames every file of the batch into place, in the order they were written.
-    pub fn commit(mut self) -> Result<()> {
-        self.committed = true;
+    pub fn commit(self) -> Result<()> {
         for (tmp, path) in BATCH.lock().unwrap().take().unwrap_or_default() {
             std::fs::rename(&tmp, &path).with_context(|| format!("{}: cannot move into place", path.display()))?;
         }
@@ -57,6 +54,7 @@ impl OutputBatch {
 }
 
 impl Drop for OutputBatch {
+    /// After a commit the list is gone; before one, its temporaries are deleted.
     fn drop(&mut self) {
         if let Some(list) = BATCH.lock().unwrap().take() {
             for (tmp, _) in list {
