@@ -40,7 +40,7 @@ fn least_squares_recovers_a_known_scale_and_shift() {
     let valid: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
     let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid, covered: &valid };
+        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
     let anchored = depth::anchor(&view, &prior, PriorSpace::Disparity, &hole, 4.0).unwrap();
     assert!((anchored.scale - 2.5).abs() < 1e-5 && (anchored.shift - 0.3).abs() < 1e-6);
     assert!(anchored.residual < 1e-6);
@@ -73,10 +73,21 @@ fn builtin_prior_keeps_the_crease_where_a_floor_meets_a_wall() {
     let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
     let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &known, covered: &known };
+        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &known };
     let (prior, _) = DepthPrior::BuiltIn.predict(&view).unwrap();
     let err = (0..w * h).filter(|&i| hole[i]).map(|i| (prior[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
     assert!(err < 1e-4, "planar prior relative error {err}");
+    // Gaussians left behind the removed object render a depth inside the hole (here a far
+    // surface over its left half): no view constrained them, so the prior must not follow them
+    let leftover: Vec<f32> = render_depth
+        .iter()
+        .enumerate()
+        .map(|(i, &d)| if hole[i] && i % w < w / 2 { 30.0 } else { d })
+        .collect();
+    let view = DepthView { render_depth: &leftover, ..view };
+    let (with_leftover, _) = DepthPrior::BuiltIn.predict(&view).unwrap();
+    let err = (0..w * h).filter(|&i| hole[i]).map(|i| (with_leftover[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
+    assert!(err < 1e-4, "prior followed the depth left inside the hole: relative error {err}");
     // the harmonic interpolant alone rounds the crease off
     let harmonic = cogeo::removal::complete::harmonic::harmonic_fill(
         &render_depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect::<Vec<_>>(),
@@ -204,7 +215,6 @@ fn onnx_depth_priors_are_anchored_in_their_own_space() {
             image: &image,
             render_depth: &render_depth,
             valid: &valid,
-            covered: &valid,
         };
         let mut prior = DepthPrior::onnx(&path, contract).unwrap();
         let (p, space) = prior.predict(&view).unwrap();

@@ -160,7 +160,6 @@ impl Completer {
             image: &rgb,
             render_depth: v.expected_depth,
             valid: &valid,
-            covered: &covered,
         };
         let (prior, space) = self.prior.predict(&view)?;
         let anchored = depth::anchor(&view, &prior, space, v.fill, self.soft_radius)?;
