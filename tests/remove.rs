@@ -97,7 +97,10 @@ fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
     assert!(own["completion"]["inpainter"].as_str().unwrap().contains(&truth_dir));
     let (po, pb) = (masked_psnr(&own), masked_psnr(&builtin));
     eprintln!("--inpainted with the true background: held-out masked PSNR {po:.2} dB, harmonic {pb:.2} dB");
-    assert!(po > pb + 0.5, "provided inpainting {po:.2} dB vs built-in {pb:.2} dB");
+    // measured on one tagged scene: 14.56 vs 13.77 dB before the depth prior ignored the depth
+    // left inside the hole, 14.85 vs 14.28 after (both rose; the smooth fill more); retraining
+    // moves the gap by about 0.1 dB
+    assert!(po > pb + 0.2, "provided inpainting {po:.2} dB vs built-in {pb:.2} dB");
     let mut filled = 0;
     for entry in std::fs::read_dir(root.join("own_inpainting/inpainted")).unwrap() {
         let name = entry.unwrap().file_name().into_string().unwrap();
