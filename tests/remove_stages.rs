@@ -39,8 +39,7 @@ fn least_squares_recovers_a_known_scale_and_shift() {
     let render_depth: Vec<f32> = truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
     let valid: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
-    let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
+    let view = DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
     let anchored = depth::anchor(&view, &prior, PriorSpace::Disparity, &hole, 4.0).unwrap();
     assert!((anchored.scale - 2.5).abs() < 1e-5 && (anchored.shift - 0.3).abs() < 1e-6);
     assert!(anchored.residual < 1e-6);
@@ -72,21 +71,18 @@ fn builtin_prior_keeps_the_crease_where_a_floor_meets_a_wall() {
     let render_depth: Vec<f32> = truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
     let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
-    let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &known };
+    let view = DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &known };
     let (prior, _) = DepthPrior::BuiltIn.predict(&view).unwrap();
     let err = (0..w * h).filter(|&i| hole[i]).map(|i| (prior[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
     assert!(err < 1e-4, "planar prior relative error {err}");
     // Gaussians left behind the removed object render a depth inside the hole (here a far
     // surface over its left half): no view constrained them, so the prior must not follow them
-    let leftover: Vec<f32> = render_depth
-        .iter()
-        .enumerate()
-        .map(|(i, &d)| if hole[i] && i % w < w / 2 { 30.0 } else { d })
-        .collect();
+    let leftover: Vec<f32> =
+        render_depth.iter().enumerate().map(|(i, &d)| if hole[i] && i % w < w / 2 { 30.0 } else { d }).collect();
     let view = DepthView { render_depth: &leftover, ..view };
     let (with_leftover, _) = DepthPrior::BuiltIn.predict(&view).unwrap();
-    let err = (0..w * h).filter(|&i| hole[i]).map(|i| (with_leftover[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
+    let err =
+        (0..w * h).filter(|&i| hole[i]).map(|i| (with_leftover[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
     assert!(err < 1e-4, "prior followed the depth left inside the hole: relative error {err}");
     // the harmonic interpolant alone rounds the crease off
     let harmonic = cogeo::removal::complete::harmonic::harmonic_fill(
@@ -145,6 +141,34 @@ fn pruning_removes_exactly_the_sparse_gaussians_near_the_patch() {
     // nothing near: nothing pruned
     let far = prune_mask(&background, &[[10.0, 10.0, 10.0]], &cfg);
     assert!(far.iter().all(|&p| !p));
+}
+
+#[test]
+fn see_through_flags_covered_hole_pixels_behind_the_continued_surfaces() {
+    // a floor plane; inside the hole the remaining Gaussians cover every pixel, over the left half
+    // with the far background (the ground behind an object nobody saw) and over the right half
+    // with the floor itself (seen from other views)
+    let (w, h) = (64, 48);
+    let truth = plane_disparity(w, h);
+    let hole = hole(w, h);
+    let render_depth: Vec<f32> =
+        (0..w * h).map(|i| if hole[i] && i % w < 32 { 1.3 / truth[i] } else { 1.0 / truth[i] }).collect();
+    let valid: Vec<bool> = hole.iter().map(|&m| !m).collect();
+    let image = vec![0.5; 3 * w * h];
+    let view = DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
+    let (prior, space) = DepthPrior::BuiltIn.predict(&view).unwrap();
+    let fill = vec![false; w * h];
+    let anchored = depth::anchor(&view, &prior, space, &fill, 4.0).unwrap();
+    let through = depth::see_through(&view, &prior, &anchored, &hole, &fill, depth::SEE_THROUGH_RATIO);
+    for i in 0..w * h {
+        assert_eq!(through[i], hole[i] && i % w < 32, "pixel ({}, {})", i % w, i / w);
+    }
+    // 1.3x behind is seen through at the 1.25 ratio, not at 1.35; pixels already in the fill are not
+    // flagged again
+    let strict = depth::see_through(&view, &prior, &anchored, &hole, &fill, 1.35);
+    assert!(strict.iter().all(|&t| !t));
+    let through = depth::see_through(&view, &prior, &anchored, &hole, &hole, depth::SEE_THROUGH_RATIO);
+    assert!(through.iter().all(|&t| !t));
 }
 
 #[test]
@@ -209,13 +233,7 @@ fn onnx_depth_priors_are_anchored_in_their_own_space() {
         assert!(lo >= 0.0 && hi <= 1.0, "encoding out of range {lo}..{hi}");
         let image: Vec<f32> = (0..3).flat_map(|_| encoded.iter().copied()).collect();
         let render_depth: Vec<f32> = depth_truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { d }).collect();
-        let view = DepthView {
-            width: w,
-            height: h,
-            image: &image,
-            render_depth: &render_depth,
-            valid: &valid,
-        };
+        let view = DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
         let mut prior = DepthPrior::onnx(&path, contract).unwrap();
         let (p, space) = prior.predict(&view).unwrap();
         assert_eq!(p.len(), w * h);

@@ -86,7 +86,8 @@ pub struct RemovalFlags {
     #[arg(long, default_value_t = 2.0)]
     pub dilate: f32,
     /// Hole pixels the remaining Gaussians already cover with at least this alpha keep their render
-    /// (background seen from other views); 1 inpaints the whole hole.
+    /// (background seen from other views), unless it lies 1.25x behind the surfaces around the
+    /// hole; 1 inpaints the whole hole.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
     /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.

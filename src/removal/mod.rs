@@ -151,7 +151,7 @@ pub fn remove(
         keep_alpha: opts.keep_alpha,
         background: opts.background,
     };
-    let masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
+    let mut masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
     clock.lap("masks");
     let mut result = selection.background; // moved: only the removed mask and count are used below
     let mut completed: Vec<Completed> = Vec::new();
@@ -162,7 +162,17 @@ pub fn remove(
         // 3. completion
         let inputs: Vec<ViewInputs> = masked.iter().zip(cameras).map(|(m, c)| completion_inputs(m, c)).collect();
         completed = completer.complete_views(&inputs, &mut |d, t| progress("complete", d, t))?;
+        drop(inputs);
+        let mut through = Vec::new();
+        for (m, k) in masked.iter_mut().zip(&completed) {
+            // with the covered pixels that looked through a gap
+            through.push(k.fill.iter().filter(|&&f| f).count() - m.fill.iter().filter(|&&f| f).count());
+            m.fill.clone_from(&k.fill);
+        }
         per_view = masked.iter().zip(cameras).zip(&completed).map(|((m, c), k)| view_report(&c.name, m, k)).collect();
+        for (r, n) in per_view.iter_mut().zip(through) {
+            r["see_through_pixels"] = n.into();
+        }
         clock.lap("complete");
         // 3b. depth-guided color transfer from the views that saw the completed surface
         if opts.stages.transfer && !photos.is_empty() {

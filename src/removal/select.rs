@@ -5,7 +5,8 @@
 //!    `hole_threshold` of the pixel's blending weight in the original render (their weight is
 //!    splatted as a one-channel feature), dilated by `dilate` pixels. The pixels to synthesize are
 //!    the part of M that the remaining Gaussians do not already cover (alpha after removal below
-//!    `keep_alpha`): background seen from other views keeps its render.
+//!    `keep_alpha`): background seen from other views keeps its render (completion adds the covered
+//!    pixels that look through a gap past the surrounding surfaces: `complete::depth::see_through`).
 
 use crate::gpu::Gpu;
 use crate::image_ops::dilate;

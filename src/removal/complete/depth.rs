@@ -221,6 +221,39 @@ pub fn anchor(v: &DepthView, prior: &[f32], space: PriorSpace, hole: &[bool], so
     Ok(Anchored { depth, scale: a, shift: b, space, fit_pixels, residual })
 }
 
+/// How much farther than the aligned prior the render inside the hole must lie to be looking
+/// through a gap (`see_through`).
+pub const SEE_THROUGH_RATIO: f32 = 1.25;
+
+/// The covered hole pixels (`hole` and not `fill`) whose rendered depth lies more than `ratio`
+/// times farther than the prior aligned by `anchored`'s scale and shift: the surfaces around the
+/// hole continue in front of what the remaining Gaussians show there. Behind a removed object the
+/// near ground is often missing (no view saw it), and rays reach the far background instead.
+pub fn see_through(
+    v: &DepthView,
+    prior: &[f32],
+    anchored: &Anchored,
+    hole: &[bool],
+    fill: &[bool],
+    ratio: f32,
+) -> Vec<bool> {
+    let (a, b) = (anchored.scale, anchored.shift);
+    (0..v.width * v.height)
+        .map(|i| {
+            if !hole[i] || fill[i] || v.render_depth[i] <= 0.0 {
+                return false;
+            }
+            let aligned = a * prior[i] as f64 + b;
+            let d_align = match anchored.space {
+                PriorSpace::Disparity if aligned > 0.0 => 1.0 / aligned,
+                PriorSpace::Depth if aligned > 0.0 => aligned,
+                _ => return false, // the prior puts the surface at infinity or behind the camera
+            };
+            v.render_depth[i] as f64 > ratio as f64 * d_align
+        })
+        .collect()
+}
+
 /// Model-free stage 2: edge-aware diffusion of the anchored depth inside the hole, guided by the
 /// completed image. Each hole pixel repeatedly becomes the average of its 8 neighbours weighted by
 /// exp(-|I_p - I_q|^2 / (2 sigma^2)), in inverse depth (where planes are affine); pixels outside the

@@ -71,6 +71,8 @@ struct Level {
     /// Planar RGB; hole pixels hold the current estimate.
     image: Vec<f32>,
     hole: Vec<bool>,
+    /// Known pixels no source patch may contain.
+    avoid: Vec<bool>,
     labels: Vec<u8>,
 }
 
@@ -78,16 +80,20 @@ impl Level {
     /// HOLE / SOURCE / TARGET bits and the surface label (bits 8..15) of every pixel.
     fn info(&self) -> Vec<u32> {
         let (w, h, r) = (self.w, self.h, PATCH_RADIUS as isize);
-        // a summed-area table of the hole answers "any hole pixel in this window" in O(1)
-        let mut sat = vec![0u32; (w + 1) * (h + 1)];
-        for y in 0..h {
-            for x in 0..w {
-                sat[(y + 1) * (w + 1) + x + 1] =
-                    self.hole[y * w + x] as u32 + sat[y * (w + 1) + x + 1] + sat[(y + 1) * (w + 1) + x]
-                        - sat[y * (w + 1) + x];
+        // summed-area tables answer "any hole (avoided) pixel in this window" in O(1)
+        let table = |mask: &dyn Fn(usize) -> bool| {
+            let mut sat = vec![0u32; (w + 1) * (h + 1)];
+            for y in 0..h {
+                for x in 0..w {
+                    sat[(y + 1) * (w + 1) + x + 1] =
+                        mask(y * w + x) as u32 + sat[y * (w + 1) + x + 1] + sat[(y + 1) * (w + 1) + x]
+                            - sat[y * (w + 1) + x];
+                }
             }
-        }
-        let holes_in = |x0: isize, y0: isize, x1: isize, y1: isize| {
+            sat
+        };
+        let (holes, unusable) = (table(&|i| self.hole[i]), table(&|i| self.hole[i] || self.avoid[i]));
+        let count = |sat: &[u32], x0: isize, y0: isize, x1: isize, y1: isize| {
             let (x0, y0) = (x0.max(0) as usize, y0.max(0) as usize);
             let (x1, y1) = ((x1.min(w as isize - 1) + 1) as usize, (y1.min(h as isize - 1) + 1) as usize);
             sat[y1 * (w + 1) + x1] + sat[y0 * (w + 1) + x0] - sat[y0 * (w + 1) + x1] - sat[y1 * (w + 1) + x0]
@@ -96,12 +102,13 @@ impl Level {
             .map(|i| {
                 let (x, y) = ((i % w) as isize, (i / w) as isize);
                 let inside = x >= r && y >= r && x + r < w as isize && y + r < h as isize;
-                let touched = holes_in(x - r, y - r, x + r, y + r) > 0;
+                let touched = count(&holes, x - r, y - r, x + r, y + r) > 0;
+                let usable = count(&unusable, x - r, y - r, x + r, y + r) == 0;
                 let mut bits = (self.labels[i] as u32) << 8;
                 if self.hole[i] {
                     bits |= HOLE;
                 }
-                if inside && !touched {
+                if inside && usable {
                     bits |= SOURCE;
                 }
                 if touched {
@@ -117,7 +124,8 @@ impl Level {
     fn coarser(&self) -> Level {
         let (w, h) = (self.w.div_ceil(2), self.h.div_ceil(2));
         let (n, fine_n) = (w * h, self.w * self.h);
-        let mut out = Level { w, h, image: vec![0.0; 3 * n], hole: vec![false; n], labels: vec![0; n] };
+        let mut out =
+            Level { w, h, image: vec![0.0; 3 * n], hole: vec![false; n], avoid: vec![false; n], labels: vec![0; n] };
         for y in 0..h {
             for x in 0..w {
                 let i = y * w + x;
@@ -128,6 +136,7 @@ impl Level {
                     }
                     let f = fy * self.w + fx;
                     out.hole[i] |= self.hole[f];
+                    out.avoid[i] |= self.avoid[f];
                     if !self.hole[f] {
                         known += 1;
                         for c in 0..3 {
@@ -170,6 +179,20 @@ impl ExemplarFill {
     /// image around the hole; `labels` (0 = none) keep each surface's pixels on that surface.
     /// Pixels outside `fill` are returned unchanged.
     pub fn fill(&self, image: &[f32], fill: &[bool], labels: &[u8], w: usize, h: usize) -> Result<Vec<f32>> {
+        self.fill_avoiding(image, fill, &vec![false; w * h], labels, w, h)
+    }
+
+    /// `fill`, taking no source patch that contains an `avoid` pixel: those stay as they are and
+    /// still count in the patch distance of targets around them, but their texture is not copied.
+    pub fn fill_avoiding(
+        &self,
+        image: &[f32],
+        fill: &[bool],
+        avoid: &[bool],
+        labels: &[u8],
+        w: usize,
+        h: usize,
+    ) -> Result<Vec<f32>> {
         let mut out = image.to_vec();
         let Some(b) = bounding_box(fill, w) else { return Ok(out) };
         let win = surfaces::fill_window(b, w, h);
@@ -180,6 +203,7 @@ impl ExemplarFill {
             h: ch,
             image: crop(image, w, h, 3, win),
             hole: (0..cw * ch).map(|k| fill[at(k)]).collect(),
+            avoid: (0..cw * ch).map(|k| avoid[at(k)]).collect(),
             labels: (0..cw * ch).map(|k| labels[at(k)]).collect(),
         }];
         loop {

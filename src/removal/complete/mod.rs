@@ -62,6 +62,9 @@ pub struct ViewInputs<'a> {
 
 /// What completion produced for one view.
 pub struct Completed {
+    /// The pixels synthesized: the view's fill, plus the covered hole pixels that looked through
+    /// a gap to the far background (`depth::see_through`).
+    pub fill: Vec<bool>,
     pub rgb: Vec<f32>,
     pub depth: Vec<f32>,
     /// Per pixel, 1 + the index of the background plane its completed depth lies on, or 0
@@ -118,7 +121,10 @@ impl Completer {
                     }
                 }
                 let rest: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !t.found[p]).collect();
-                c.rgb = self.inpaint_again(i, &image, &rest, &c.surfaces, w, h)?;
+                // captured colors are sources now; the rest of the hole's render still is not
+                let found_or_fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || t.found[p]).collect();
+                let avoid = leftover(holes[i], &found_or_fill);
+                c.rgb = self.inpaint_again(i, &image, &rest, &avoid, &c.surfaces, w, h)?;
             }
             counts.push(n);
         }
@@ -143,6 +149,7 @@ impl Completer {
             let mean = if covered.is_empty() { 1.0 } else { covered.iter().sum::<f32>() / covered.len() as f32 };
             let depth = (0..w * h).map(|i| if v.alpha[i] > 0.05 { v.expected_depth[i] } else { mean }).collect();
             return Ok(Completed {
+                fill: v.fill.to_vec(),
                 rgb,
                 depth,
                 surfaces: vec![0; w * h],
@@ -153,32 +160,37 @@ impl Completer {
                 residual: 0.0,
             });
         }
-        let covered: Vec<bool> = (0..w * h).map(|i| v.alpha[i] > 0.5).collect();
-        let view = DepthView {
-            width: w,
-            height: h,
-            image: &rgb,
-            render_depth: v.expected_depth,
-            valid: &valid,
-        };
+        let view = DepthView { width: w, height: h, image: &rgb, render_depth: v.expected_depth, valid: &valid };
         let (prior, space) = self.prior.predict(&view)?;
-        let anchored = depth::anchor(&view, &prior, space, v.fill, self.soft_radius)?;
+        let mut anchored = depth::anchor(&view, &prior, space, v.fill, self.soft_radius)?;
+        // covered hole pixels that look past the surfaces around the hole are synthesized too
+        let through = depth::see_through(&view, &prior, &anchored, v.hole, v.fill, depth::SEE_THROUGH_RATIO);
+        let fill: Vec<bool> = v.fill.iter().zip(&through).map(|(&f, &t)| f || t).collect();
+        let mut inpainted_again = None;
+        if through.iter().any(|&t| t) {
+            anchored = depth::anchor(&view, &prior, space, &fill, self.soft_radius)?;
+            if first_needed {
+                inpainted_again = Some(self.inpainter.inpaint_view(index, v.rgb, &fill, w, h)?);
+            }
+        }
+        let rgb = inpainted_again.unwrap_or(rgb);
+        let covered: Vec<bool> = (0..w * h).map(|i| v.alpha[i] > 0.5 && !through[i]).collect();
         // depth guides color: the planes around the fill, and which of them each pixel lies on
         let disparity: Vec<f32> = anchored.depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect();
-        let around: Vec<bool> = (0..w * h).map(|i| !v.fill[i] && covered[i]).collect();
-        let planes = surfaces::surfaces_around(&disparity, &around, v.fill, w, h, depth::PLANE_SEED);
+        let around: Vec<bool> = (0..w * h).map(|i| !fill[i] && covered[i]).collect();
+        let planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
         let labels = planes.labels(&anchored.depth, w);
         // the built-in inpainter fills again, surface by surface; a learned or provided
         // inpainting is kept, since it sees more than a surface label
         let rgb = match &self.inpainter {
-            Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, v.fill, &labels, w, h, 3),
-            Inpainter::Exemplar(e) => e.fill(v.rgb, v.fill, &labels, w, h)?,
+            Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
+            Inpainter::Exemplar(e) => e.fill_avoiding(v.rgb, &fill, &leftover(v.hole, &fill), &labels, w, h)?,
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => rgb,
         };
         let depth = match &mut self.refiner {
             Some(den) => diffusion::masked_ddim(
                 &anchored.depth,
-                v.fill,
+                &fill,
                 &rgb,
                 w,
                 h,
@@ -189,11 +201,12 @@ impl Completer {
             None => {
                 // covered pixels keep the depth of the Gaussians that cover them (seen from other
                 // views); only the interpolated part follows the image's edges
-                let free: Vec<bool> = (0..w * h).map(|i| v.fill[i] && !covered[i]).collect();
+                let free: Vec<bool> = (0..w * h).map(|i| fill[i] && !covered[i]).collect();
                 depth::refine_edge_aware(&anchored.depth, &rgb, &free, w, h, self.refine_sweeps)
             }
         };
         Ok(Completed {
+            fill,
             rgb,
             depth,
             surfaces: labels,
@@ -206,20 +219,29 @@ impl Completer {
     }
 
     /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more pixels known), keeping
-    /// each surface's colors on that surface where the built-in inpainter is used.
+    /// each surface's colors on that surface where the built-in inpainter is used; `avoid` pixels
+    /// stay but lend the exemplar fill no texture.
+    #[allow(clippy::too_many_arguments)]
     pub fn inpaint_again(
         &mut self,
         index: usize,
         image: &[f32],
         fill: &[bool],
+        avoid: &[bool],
         labels: &[u8],
         w: usize,
         h: usize,
     ) -> Result<Vec<f32>> {
         match &self.inpainter {
             Inpainter::Harmonic => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
-            Inpainter::Exemplar(e) => e.fill(image, fill, labels, w, h),
+            Inpainter::Exemplar(e) => e.fill_avoiding(image, fill, avoid, labels, w, h),
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => self.inpainter.inpaint_view(index, image, fill, w, h),
         }
     }
+}
+
+/// The hole pixels that keep the render of the Gaussians left behind the objects (not `fill`):
+/// kept, but no texture source, since few views or none constrained those Gaussians.
+fn leftover(hole: &[bool], fill: &[bool]) -> Vec<bool> {
+    hole.iter().zip(fill).map(|(&m, &f)| m && !f).collect()
 }
