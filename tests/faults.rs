@@ -47,23 +47,6 @@ fn run_limited(limit: &str, args: &[&str]) -> Output {
         .unwrap()
 }
 
-fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap().flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push((p.clone(), std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 /// One `error:` line with every `expect` in it, exit status 1.
 fn assert_one_error(out: &Output, expect: &[&str], what: &str) -> String {
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
@@ -80,28 +63,15 @@ fn assert_one_error(out: &Output, expect: &[&str], what: &str) -> String {
 #[test]
 fn train_remove_and_render_past_the_device_memory_name_sizes_and_device() {
     let device = "MiB of device memory, of which cogeo may use 0.05 MiB (--max-device-memory)";
-    let cases: [(&str, Vec<String>); 3] = [
-        ("train", vec!["train".into(), "--data".into(), path("data"), "--iters".into(), "10".into()]),
-        (
-            "remove",
-            vec![
-                "remove".into(),
-                "--scene".into(),
-                path("tagged.ply"),
-                "--data".into(),
-                path("data"),
-                "--labels".into(),
-                "1".into(),
-            ],
-        ),
-        (
-            "render",
-            vec!["render".into(), "--scene".into(), path("tagged.ply"), "--colmap".into(), path("data/sparse/0")],
-        ),
+    let (data, tagged, model) = (path("data"), path("tagged.ply"), path("data/sparse/0"));
+    let cases: [(&str, Vec<&str>); 3] = [
+        ("train", vec!["train", "--data", &data, "--iters", "10"]),
+        ("remove", vec!["remove", "--scene", &tagged, "--data", &data, "--labels", "1"]),
+        ("render", vec!["render", "--scene", &tagged, "--colmap", &model]),
     ];
     for (name, args) in cases {
         let out_dir = path(&format!("oom_{name}"));
-        let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let mut args = args;
         args.extend(["--out", &out_dir, "--max-device-memory", "0.05"]);
         let out = run_limited("true", &args);
         let error = assert_one_error(&out, &["out of GPU memory: buffer", "already in use", device], name);
@@ -115,57 +85,25 @@ fn train_remove_and_render_past_the_device_memory_name_sizes_and_device() {
 #[test]
 fn a_full_disk_while_writing_keeps_the_previous_outputs() {
     // blocks of 512 bytes: every PLY is larger than 8, every 32x24 image than 1
-    let cases: [(&str, &str, Vec<String>); 3] = [
-        (
-            "train",
-            "ulimit -f 8",
-            vec![
-                "train".into(),
-                "--data".into(),
-                path("data"),
-                "--iters".into(),
-                "20".into(),
-                "--sh-degree".into(),
-                "0".into(),
-            ],
-        ),
+    let (data, tagged, model) = (path("data"), path("tagged.ply"), path("data/sparse/0"));
+    let cases: [(&str, &str, Vec<&str>); 3] = [
+        ("train", "ulimit -f 8", vec!["train", "--data", &data, "--iters", "20", "--sh-degree", "0"]),
         (
             "remove",
             "ulimit -f 8",
-            vec![
-                "remove".into(),
-                "--scene".into(),
-                path("tagged.ply"),
-                "--data".into(),
-                path("data"),
-                "--labels".into(),
-                "1".into(),
-                "--refine-iters".into(),
-                "5".into(),
-            ],
+            vec!["remove", "--scene", &tagged, "--data", &data, "--labels", "1", "--refine-iters", "5"],
         ),
-        (
-            "render",
-            "ulimit -f 1",
-            vec![
-                "render".into(),
-                "--scene".into(),
-                path("tagged.ply"),
-                "--colmap".into(),
-                path("data/sparse/0"),
-                "--depth".into(),
-            ],
-        ),
+        ("render", "ulimit -f 1", vec!["render", "--scene", &tagged, "--colmap", &model, "--depth"]),
     ];
     for (name, limit, args) in cases {
         let out_dir = path(&format!("disk_{name}"));
-        let mut args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let mut args = args;
         args.extend(["--out", &out_dir]);
         run_cogeo(EXE, &args);
-        let before = files(Path::new(&out_dir));
+        let before = common::snapshot(Path::new(&out_dir));
         let out = run_limited(limit, &args);
         assert_one_error(&out, &["File too large", &out_dir], name);
-        let after = files(Path::new(&out_dir));
+        let after = common::snapshot(Path::new(&out_dir));
         let names = |f: &[(PathBuf, Vec<u8>)]| f.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>();
         assert_eq!(names(&after), names(&before), "{name}: files appeared or vanished (temporary files left?)");
         for ((p, a), (_, b)) in after.iter().zip(&before) {

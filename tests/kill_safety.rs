@@ -41,34 +41,13 @@ fn fixture() -> &'static Fixture {
     })
 }
 
-/// Every file under `dir` with its bytes, to prove inputs unchanged.
-fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    if dir.is_file() {
-        return vec![(dir.to_path_buf(), std::fs::read(dir).unwrap())];
-    }
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap().flatten() {
-            let p = e.path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push((p.clone(), std::fs::read(&p).unwrap()));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 /// Checks every file under `dir` by its kind; returns the temporary files of killed writers.
 fn check_outputs(dir: &Path, context: &str) -> Vec<PathBuf> {
     let mut temps = Vec::new();
     if !dir.exists() {
         return temps;
     }
-    for (path, bytes) in snapshot(dir) {
+    for (path, bytes) in common::snapshot(dir) {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
         let what = format!("{context}: {}", path.display());
         if name.starts_with('.') && name.ends_with(".tmp") {
@@ -126,7 +105,7 @@ fn kill_after(args: &[&str], after: Duration) -> bool {
 
 /// The kill protocol for one command writing into `out` (a folder, or a file and its sidecar).
 fn kill_repeatedly(name: &str, args: &[&str], outputs: &[PathBuf], inputs: &[PathBuf]) {
-    let before: Vec<_> = inputs.iter().map(|p| snapshot(p)).collect();
+    let before: Vec<_> = inputs.iter().map(|p| common::snapshot(p)).collect();
     let check_all = |context: &str| -> usize { outputs.iter().map(|o| check_outputs(o, context).len()).sum() };
     // a fresh output folder, killed early and late; then over a complete previous output
     let full = timed_run(args);
@@ -146,7 +125,7 @@ fn kill_repeatedly(name: &str, args: &[&str], outputs: &[PathBuf], inputs: &[Pat
     eprintln!("{name}: {interrupted} of 6 kills interrupted the run; {temps} temporary files seen after them");
     assert!(interrupted >= 3, "{name}: only {interrupted} of 6 kills landed inside the run");
     for (input, snap) in inputs.iter().zip(&before) {
-        assert!(snapshot(input) == *snap, "{name} changed its input {}", input.display());
+        assert!(common::snapshot(input) == *snap, "{name} changed its input {}", input.display());
     }
     timed_run(args);
     let temps = check_all(&format!("{name}, run after the kills"));

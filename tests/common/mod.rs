@@ -7,7 +7,7 @@ pub mod onnx;
 use cogeo::gpu::{DeviceChoice, Gpu};
 use cogeo::rng::Rng;
 use cogeo::scene::{Camera, GaussianScene};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A GPU context that asserts, when dropped at the end of a passing test, that the validation layer
 /// reported nothing.
@@ -165,4 +165,26 @@ pub fn finite_differences(x: &mut [f64], which: std::ops::Range<usize>, h: f64, 
             (up - down) / (2.0 * h)
         })
         .collect()
+}
+
+/// Every file under `dir` (or `dir` itself, a file) with its bytes, sorted by path: to prove files
+/// unchanged.
+pub fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    if dir.is_file() {
+        return vec![(dir.to_path_buf(), std::fs::read(dir).unwrap())];
+    }
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((p.clone(), std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
 }
