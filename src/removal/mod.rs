@@ -312,6 +312,7 @@ fn completion_inputs<'a>(m: &'a MaskedView, camera: &Camera) -> ViewInputs<'a> {
     ViewInputs {
         width: camera.width as usize,
         height: camera.height as usize,
+        intrinsics: complete::rectify::Intrinsics::from(camera),
         rgb: &m.after_removal.rgb,
         alpha: &m.after_removal.alpha,
         expected_depth: &m.after_removal.depth,

@@ -8,13 +8,16 @@
 //! texture and the wall the wall's. Matches are translations; on a receding floor the patch
 //! distance itself prefers sources at the same distance (the same rows), where the texture has the
 //! target's period. The coarsest level starts from the surface-wise harmonic fill.
+//! `fill_rectified` goes further where the camera is known: each plane's pixels are synthesized
+//! in that plane's own frame (rectify.rs), where the texture has one period everywhere.
 //!
 //! The GPU passes are `exemplar_nnf.comp` (one PatchMatch pass: propagation, random search, a
 //! global jump) and `exemplar_vote.comp`; the pyramid and the hand-over between levels are host
 //! work on small arrays. Deterministic: randomness is a hash of (seed, pass, pixel) and the
 //! field is updated Jacobi-style.
 
-use super::surfaces::{self, fill_by_surface};
+use super::rectify::{rectify, Intrinsics, PlaneFrame};
+use super::surfaces::{self, fill_by_surface, Plane};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
 use crate::image_ops::{bounding_box, crop};
 use crate::rng::Rng;
@@ -180,6 +183,41 @@ impl ExemplarFill {
     /// Pixels outside `fill` are returned unchanged.
     pub fn fill(&self, image: &[f32], fill: &[bool], labels: &[u8], w: usize, h: usize) -> Result<Vec<f32>> {
         self.fill_avoiding(image, fill, &vec![false; w * h], labels, w, h)
+    }
+
+    /// `fill_avoiding`, with the pixels of each background plane (label 1 + its index in
+    /// `planes`, seen through `k`) synthesized in the plane's rectified frame from that plane's
+    /// known pixels, so that a receding checkerboard keeps its period and phase. Pixels no plane
+    /// takes (label 0, or off their plane) are synthesized in the image afterwards, with the
+    /// planes' results as known pixels.
+    #[allow(clippy::too_many_arguments)]
+    pub fn fill_rectified(
+        &self,
+        image: &[f32],
+        fill: &[bool],
+        avoid: &[bool],
+        labels: &[u8],
+        planes: &[Plane],
+        k: &Intrinsics,
+        w: usize,
+        h: usize,
+    ) -> Result<Vec<f32>> {
+        let mut out = image.to_vec();
+        let mut rest = fill.to_vec();
+        for (s, plane) in planes.iter().enumerate().take(u8::MAX as usize) {
+            let label = s as u8 + 1;
+            let Some(frame) = PlaneFrame::new(plane, k) else { continue };
+            let Some(grid) = rectify(&frame, image, fill, avoid, labels, label, w, h) else { continue };
+            let filled = self.fill_avoiding(&grid.image, &grid.hole, &grid.avoid, &grid.labels, grid.w, grid.h)?;
+            let written = grid.write_back(&filled, &mut out, fill, labels, label, w, h);
+            for (r, &done) in rest.iter_mut().zip(&written) {
+                *r &= !done;
+            }
+        }
+        if rest.iter().any(|&r| r) {
+            out = self.fill_avoiding(&out, &rest, avoid, labels, w, h)?;
+        }
+        Ok(out)
     }
 
     /// `fill`, taking no source patch that contains an `avoid` pixel: those stay as they are and

@@ -12,6 +12,8 @@
 //! - `harmonic`: the harmonic fill (smooth interpolation into a hole) of colors and depth.
 //! - `surfaces`: the background planes around a hole, for the depth prior and for keeping each
 //!   surface's colors on it.
+//! - `rectify`: a plane's pixels on a regular grid in the plane, where the exemplar copies
+//!   texture with its period under perspective.
 //! - `transfer`: colors of the completed surface from the other views that saw it.
 
 pub mod depth;
@@ -19,6 +21,7 @@ pub mod diffusion;
 pub mod exemplar;
 pub mod harmonic;
 pub mod inpaint;
+pub mod rectify;
 pub mod surfaces;
 pub mod transfer;
 
@@ -27,6 +30,8 @@ use anyhow::Result;
 use depth::{DepthPrior, DepthView, PriorSpace};
 use diffusion::OnnxDenoiser;
 use inpaint::Inpainter;
+use rectify::Intrinsics;
+use surfaces::Plane;
 use transfer::{transfer, SourceView, Transfer};
 
 /// The models and settings of completion.
@@ -50,6 +55,8 @@ pub struct Completer {
 pub struct ViewInputs<'a> {
     pub width: usize,
     pub height: usize,
+    /// The view's camera intrinsics (for the planes in 3D).
+    pub intrinsics: Intrinsics,
     /// Render of the scene after removal (planar RGB).
     pub rgb: &'a [f32],
     pub alpha: &'a [f32],
@@ -70,6 +77,8 @@ pub struct Completed {
     /// Per pixel, 1 + the index of the background plane its completed depth lies on, or 0
     /// (surfaces.rs); all 0 without depth guidance.
     pub surfaces: Vec<u8>,
+    /// Those planes.
+    pub planes: Vec<Plane>,
     pub scale: f64,
     pub shift: f64,
     pub space: Option<PriorSpace>,
@@ -124,7 +133,8 @@ impl Completer {
                 // captured colors are sources now; the rest of the hole's render still is not
                 let found_or_fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || t.found[p]).collect();
                 let avoid = leftover(holes[i], &found_or_fill);
-                c.rgb = self.inpaint_again(i, &image, &rest, &avoid, &c.surfaces, w, h)?;
+                let k = Intrinsics::from(&cameras[i]);
+                c.rgb = self.inpaint_again(i, &image, &rest, &avoid, (&c.surfaces, &c.planes, &k), w, h)?;
             }
             counts.push(n);
         }
@@ -153,6 +163,7 @@ impl Completer {
                 rgb,
                 depth,
                 surfaces: vec![0; w * h],
+                planes: Vec::new(),
                 scale: 1.0,
                 shift: 0.0,
                 space: None,
@@ -184,7 +195,9 @@ impl Completer {
         // inpainting is kept, since it sees more than a surface label
         let rgb = match &self.inpainter {
             Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
-            Inpainter::Exemplar(e) => e.fill_avoiding(v.rgb, &fill, &leftover(v.hole, &fill), &labels, w, h)?,
+            Inpainter::Exemplar(e) => {
+                e.fill_rectified(v.rgb, &fill, &leftover(v.hole, &fill), &labels, &planes.planes, &v.intrinsics, w, h)?
+            }
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => rgb,
         };
         let depth = match &mut self.refiner {
@@ -210,6 +223,7 @@ impl Completer {
             rgb,
             depth,
             surfaces: labels,
+            planes: planes.planes,
             scale: anchored.scale,
             shift: anchored.shift,
             space: Some(space),
@@ -218,8 +232,9 @@ impl Completer {
         })
     }
 
-    /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more pixels known), keeping
-    /// each surface's colors on that surface where the built-in inpainter is used; `avoid` pixels
+    /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more
+    /// pixels known), keeping each surface's colors on that surface where the built-in inpainter
+    /// is used (`surfaces`: the labels, their planes and the view's intrinsics); `avoid` pixels
     /// stay but lend the exemplar fill no texture.
     #[allow(clippy::too_many_arguments)]
     pub fn inpaint_again(
@@ -228,13 +243,13 @@ impl Completer {
         image: &[f32],
         fill: &[bool],
         avoid: &[bool],
-        labels: &[u8],
+        (labels, planes, k): (&[u8], &[Plane], &Intrinsics),
         w: usize,
         h: usize,
     ) -> Result<Vec<f32>> {
         match &self.inpainter {
             Inpainter::Harmonic => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
-            Inpainter::Exemplar(e) => e.fill_avoiding(image, fill, avoid, labels, w, h),
+            Inpainter::Exemplar(e) => e.fill_rectified(image, fill, avoid, labels, planes, k, w, h),
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => self.inpainter.inpaint_view(index, image, fill, w, h),
         }
     }

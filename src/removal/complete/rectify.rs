@@ -1,0 +1,296 @@
+//! Plane rectification for the exemplar inpainter. Under perspective a receding floor's texture
+//! shrinks with distance, so an image-space translation copies a checkerboard or a brick course
+//! with the wrong period and phase. A background plane (surfaces.rs, disparity affine in pixel
+//! coordinates) together with the camera's intrinsics is a plane in 3D; its pixels resampled onto a
+//! regular grid in the plane's own coordinates show the texture at one scale everywhere, where a
+//! translation is the right match. The exemplar synthesizes there and the result is sampled back
+//! through the same homography.
+
+use super::surfaces::Plane;
+use crate::scene::Camera;
+use glam::{DVec2, DVec3};
+
+/// Pinhole intrinsics in pixels; pixel (px, py) is evaluated at (px + 0.5, py + 0.5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+impl From<&Camera> for Intrinsics {
+    fn from(c: &Camera) -> Intrinsics {
+        Intrinsics { fx: c.fx, fy: c.fy, cx: c.cx, cy: c.cy }
+    }
+}
+
+impl Intrinsics {
+    /// The camera-space ray through image point (x, y), with z = 1.
+    fn ray(&self, x: f64, y: f64) -> DVec3 {
+        DVec3::new((x - self.cx) / self.fx, (y - self.cy) / self.fy, 1.0)
+    }
+}
+
+/// The grid labels (`Rectified::labels`).
+pub const ON_SURFACE: u8 = 1;
+pub const OFF_SURFACE: u8 = 2;
+
+/// Known texels sampled from pixels this many texels wide or more lend no texture: upsampled, the
+/// far part of a floor is a blur that the hole would copy.
+const BLURRY_FOOTPRINT: f64 = 1.5;
+
+/// Sample points per pixel side when writing back.
+const SUB: usize = 3;
+
+/// The largest rectified grid side; a larger plane region is sampled with coarser texels.
+const MAX_GRID: usize = 256;
+
+/// A plane's own 2D frame: the points X with q . X = 1 (camera space), origin at the point nearest
+/// the camera, axes `e1` (the image x axis projected into the plane, or the view direction's
+/// projection for a plane seen edge-on to it) and `e2` = n x e1.
+#[derive(Clone, Copy, Debug)]
+pub struct PlaneFrame {
+    k: Intrinsics,
+    q: DVec3,
+    origin: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+}
+
+impl PlaneFrame {
+    /// The frame of `plane` (disparity a x + b y + c over the image) seen through `k`; None for a
+    /// degenerate plane. Since 1/z = q . ray(x, y) = (q.x / fx) x + (q.y / fy) y + q.z - q.x cx / fx
+    /// - q.y cy / fy, q follows from (a, b, c) directly.
+    pub fn new(plane: &Plane, k: &Intrinsics) -> Option<PlaneFrame> {
+        let q = DVec3::new(plane.a * k.fx, plane.b * k.fy, plane.c + plane.a * k.cx + plane.b * k.cy);
+        let len2 = q.length_squared();
+        if !(len2 > 0.0 && len2.is_finite()) {
+            return None;
+        }
+        let n = q / len2.sqrt();
+        let project = |axis: DVec3| axis - n * n.dot(axis);
+        let along_x = project(DVec3::X);
+        let e1 = if along_x.length() > 0.3 { along_x } else { project(DVec3::Z) }.normalize();
+        Some(PlaneFrame { k: *k, q, origin: q / len2, e1, e2: n.cross(e1) })
+    }
+
+    /// Plane coordinates of image point (x, y); None where the ray misses the plane in front.
+    pub fn to_plane(&self, x: f64, y: f64) -> Option<DVec2> {
+        let r = self.k.ray(x, y);
+        let disparity = self.q.dot(r);
+        if !(disparity > 0.0 && disparity.is_finite()) {
+            return None;
+        }
+        let p = r / disparity - self.origin;
+        Some(DVec2::new(p.dot(self.e1), p.dot(self.e2)))
+    }
+
+    /// Image point of plane coordinates `uv`; None behind the camera.
+    pub fn to_image(&self, uv: DVec2) -> Option<DVec2> {
+        let p = self.origin + uv.x * self.e1 + uv.y * self.e2;
+        if p.z <= 1e-9 * p.length() {
+            return None;
+        }
+        Some(DVec2::new(self.k.fx * p.x / p.z + self.k.cx, self.k.fy * p.y / p.z + self.k.cy))
+    }
+
+    /// Side of the plane square one pixel at pixel center (x, y) covers (square root of the
+    /// homography's Jacobian determinant).
+    fn footprint(&self, x: f64, y: f64) -> Option<f64> {
+        let (a, b, c) = (self.to_plane(x - 0.5, y)?, self.to_plane(x + 0.5, y)?, self.to_plane(x, y - 0.5)?);
+        let d = self.to_plane(x, y + 0.5)?;
+        let (du, dv) = (b - a, d - c);
+        Some((du.x * dv.y - du.y * dv.x).abs().sqrt())
+    }
+}
+
+/// One surface's pixels around a hole resampled onto a regular grid in its plane.
+pub struct Rectified {
+    pub w: usize,
+    pub h: usize,
+    /// Planar RGB; hole texels hold 0.
+    pub image: Vec<f32>,
+    /// Texels to synthesize: those on the surface's fill pixels.
+    pub hole: Vec<bool>,
+    /// Texels that lend no texture: on avoided pixels, and those off the surface (other
+    /// surfaces, off the image).
+    pub avoid: Vec<bool>,
+    /// ON_SURFACE, or OFF_SURFACE for texels the surface's pixels do not cover: the exemplar's
+    /// patch distance and vote skip those.
+    pub labels: Vec<u8>,
+    frame: PlaneFrame,
+    /// Plane coordinates of texel (0, 0)'s corner, and the texel side.
+    corner: DVec2,
+    texel: f64,
+}
+
+/// Rectifies the pixels labelled `label` (1 + the plane's index, as in `Surfaces::labels`) of the
+/// planar RGB `image` (w x h) around its `fill` pixels of that label. The grid's texel is the
+/// median footprint of those pixels (about one texel per hole pixel); it covers their plane box
+/// grown by its own size on every side (at least 16 texels), at most MAX_GRID texels a side. None
+/// when no such pixel maps onto the plane.
+#[allow(clippy::too_many_arguments)]
+pub fn rectify(
+    frame: &PlaneFrame,
+    image: &[f32],
+    fill: &[bool],
+    avoid: &[bool],
+    labels: &[u8],
+    label: u8,
+    w: usize,
+    h: usize,
+) -> Option<Rectified> {
+    let center = |i: usize| ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+    let mine: Vec<usize> = (0..w * h).filter(|&i| fill[i] && labels[i] == label).collect();
+    let mut feet: Vec<f64> = mine.iter().filter_map(|&i| frame.footprint(center(i).0, center(i).1)).collect();
+    let uvs: Vec<DVec2> = mine.iter().filter_map(|&i| frame.to_plane(center(i).0, center(i).1)).collect();
+    if feet.is_empty() || uvs.is_empty() {
+        return None;
+    }
+    feet.sort_by(f64::total_cmp);
+    let (lo, hi) = uvs.iter().fold((uvs[0], uvs[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let mut texel = feet[feet.len() / 2];
+    let side = |extent: f64, texel: f64| (extent / texel).ceil() as usize + 1;
+    // the hole's own box must fit with some context
+    let hole_side = side((hi - lo).max_element(), texel);
+    if hole_side > MAX_GRID / 2 {
+        texel *= hole_side as f64 / (MAX_GRID / 2) as f64;
+    }
+    let grid = |extent: f64| {
+        let inner = side(extent, texel);
+        (inner + 2 * inner.max(16)).min(MAX_GRID)
+    };
+    let (gw, gh) = (grid(hi.x - lo.x), grid(hi.y - lo.y));
+    let corner = (lo + hi) * 0.5 - DVec2::new(gw as f64, gh as f64) * (0.5 * texel);
+    let n = gw * gh;
+    let mut out = Rectified {
+        w: gw,
+        h: gh,
+        image: vec![0.0; 3 * n],
+        hole: vec![false; n],
+        avoid: vec![true; n],
+        labels: vec![OFF_SURFACE; n],
+        frame: *frame,
+        corner,
+        texel,
+    };
+    let ours = |x: isize, y: isize| {
+        x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h && labels[y as usize * w + x as usize] == label
+    };
+    for t in 0..n {
+        let uv = corner + DVec2::new((t % gw) as f64 + 0.5, (t / gw) as f64 + 0.5) * texel;
+        let Some(xy) = frame.to_image(uv) else { continue };
+        let (px, py) = (xy.x.floor(), xy.y.floor());
+        if !(px.abs() < 1e9 && py.abs() < 1e9 && ours(px as isize, py as isize)) {
+            continue; // another surface or off the image
+        }
+        let p = py as usize * w + px as usize;
+        out.labels[t] = ON_SURFACE;
+        if fill[p] {
+            (out.hole[t], out.avoid[t]) = (true, false);
+            continue;
+        }
+        // a pixel much larger than a texel holds that texture blurred: context, but no source
+        let coarse = frame.footprint(xy.x, xy.y).is_none_or(|f| f > BLURRY_FOOTPRINT * texel);
+        out.avoid[t] = avoid[p] || coarse;
+        // bilinear among the surface's known pixels, nearest where a neighbour is not one
+        let (sx, sy) = (xy.x - 0.5, xy.y - 0.5);
+        let (x0, y0) = (sx.floor() as isize, sy.floor() as isize);
+        let (fx, fy) = ((sx - x0 as f64) as f32, (sy - y0 as f64) as f32);
+        let corners = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
+        let usable = corners.iter().all(|&(x, y)| ours(x, y) && !fill[y as usize * w + x as usize]);
+        for c in 0..3 {
+            out.image[c * n + t] = if usable {
+                let v = |(x, y): (isize, isize)| image[c * w * h + y as usize * w + x as usize];
+                let top = v(corners[0]) * (1.0 - fx) + v(corners[1]) * fx;
+                let bottom = v(corners[2]) * (1.0 - fx) + v(corners[3]) * fx;
+                top * (1.0 - fy) + bottom * fy
+            } else {
+                image[c * w * h + p]
+            };
+        }
+    }
+    Some(out)
+}
+
+impl Rectified {
+    /// Writes the synthesized grid `filled` (planar RGB, w x h of the grid) back into `out` (the
+    /// image, planar RGB, iw x ih) at the `fill` pixels labelled `label`, each the mean of
+    /// bilinear samples at SUB x SUB points of the pixel; returns which pixels it wrote.
+    #[allow(clippy::too_many_arguments)]
+    pub fn write_back(
+        &self,
+        filled: &[f32],
+        out: &mut [f32],
+        fill: &[bool],
+        labels: &[u8],
+        label: u8,
+        iw: usize,
+        ih: usize,
+    ) -> Vec<bool> {
+        let (gw, gh, n) = (self.w, self.h, self.w * self.h);
+        let mut written = vec![false; iw * ih];
+        for p in (0..iw * ih).filter(|&p| fill[p] && labels[p] == label) {
+            // the mean over SUB x SUB points of the pixel: a far pixel covers many texels
+            let mut acc = [0f32; 3];
+            let mut samples = 0;
+            for k in 0..SUB * SUB {
+                let x = (p % iw) as f64 + ((k % SUB) as f64 + 0.5) / SUB as f64;
+                let y = (p / iw) as f64 + ((k / SUB) as f64 + 0.5) / SUB as f64;
+                let Some(uv) = self.frame.to_plane(x, y) else { continue };
+                let g = (uv - self.corner) / self.texel - DVec2::splat(0.5);
+                let gx = g.x.clamp(0.0, (gw - 1) as f64);
+                let gy = g.y.clamp(0.0, (gh - 1) as f64);
+                let (x0, y0) = (gx.floor() as usize, gy.floor() as usize);
+                let (x1, y1) = ((x0 + 1).min(gw - 1), (y0 + 1).min(gh - 1));
+                let (fx, fy) = ((gx - x0 as f64) as f32, (gy - y0 as f64) as f32);
+                for (c, a) in acc.iter_mut().enumerate() {
+                    let v = |x: usize, y: usize| filled[c * n + y * gw + x];
+                    let top = v(x0, y0) * (1.0 - fx) + v(x1, y0) * fx;
+                    let bottom = v(x0, y1) * (1.0 - fx) + v(x1, y1) * fx;
+                    *a += top * (1.0 - fy) + bottom * fy;
+                }
+                samples += 1;
+            }
+            if samples == 0 {
+                continue;
+            }
+            for (c, a) in acc.iter().enumerate() {
+                out[c * iw * ih + p] = a / samples as f32;
+            }
+            written[p] = true;
+        }
+        written
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A floor plane y = 1 seen by a camera tilted down: the frame's maps invert each other and
+    /// its disparity agrees with the plane's.
+    #[test]
+    fn plane_frame_round_trips_and_matches_the_planes_disparity() {
+        let k = Intrinsics { fx: 80.0, fy: 80.0, cx: 48.0, cy: 36.0 };
+        // y = 1 in camera space: 1/z = ray.y = (y - cy) / fy, so a = 1/fy, b... along image y
+        let plane = Plane { a: 0.0, b: 1.0 / k.fy, c: -k.cy / k.fy };
+        let f = PlaneFrame::new(&plane, &k).unwrap();
+        for &(x, y) in &[(10.5, 50.5), (48.0, 40.0), (90.25, 71.5)] {
+            let uv = f.to_plane(x, y).unwrap();
+            let back = f.to_image(uv).unwrap();
+            assert!((back.x - x).abs() < 1e-9 && (back.y - y).abs() < 1e-9, "{x},{y} -> {back}");
+            // the 3D point is on y = 1 at depth 1 / disparity
+            let z = 1.0 / plane.disparity(x, y);
+            let p = f.origin + uv.x * f.e1 + uv.y * f.e2;
+            assert!((p.y - 1.0).abs() < 1e-9 && (p.z - z).abs() < 1e-9 * z, "{p} vs z {z}");
+        }
+        // above the horizon the ray misses the floor
+        assert!(f.to_plane(48.0, 30.0).is_none());
+        // a pixel twice as far covers a square twice as wide (for this floor, footprint ~ z^2)
+        let (z1, z2) = (1.0 / plane.disparity(48.0, 56.0), 1.0 / plane.disparity(48.0, 46.0));
+        let ratio = f.footprint(48.0, 46.0).unwrap() / f.footprint(48.0, 56.0).unwrap();
+        assert!((ratio / (z2 / z1).powf(1.5) - 1.0).abs() < 0.02, "ratio {ratio}, depths {z1} {z2}");
+    }
+}
