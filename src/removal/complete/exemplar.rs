@@ -33,7 +33,7 @@ const TARGET: u32 = 4;
 /// Added to the patch distance (mean squared RGB difference, at most 1) of a source on another surface.
 const LABEL_PENALTY: f32 = 1.0;
 /// The vote's weight scale: exp(-(distance - best) / VOTE_SIGMA2).
-const VOTE_SIGMA2: f32 = 0.005;
+const VOTE_SIGMA2: f32 = 0.0005;
 /// Search-then-vote rounds on the coarsest level (which finds the layout) and on the finer ones
 /// (which start from the coarser field and only refine it), and the propagation steps of each
 /// round's passes.
@@ -188,8 +188,8 @@ impl ExemplarFill {
     /// `fill_avoiding`, with the pixels of each background plane (label 1 + its index in
     /// `planes`, seen through `k`) synthesized in the plane's rectified frame from that plane's
     /// known pixels, so that a receding checkerboard keeps its period and phase. Pixels no plane
-    /// takes (label 0, or off their plane) are synthesized in the image afterwards, with the
-    /// planes' results as known pixels.
+    /// takes (label 0, off their plane, or a plane whose grid has fewer source patches than hole
+    /// texels) are synthesized in the image afterwards, with the planes' results as known pixels.
     #[allow(clippy::too_many_arguments)]
     pub fn fill_rectified(
         &self,
@@ -208,6 +208,20 @@ impl ExemplarFill {
             let label = s as u8 + 1;
             let Some(frame) = PlaneFrame::new(plane, k) else { continue };
             let Some(grid) = rectify(&frame, image, fill, avoid, labels, label, w, h) else { continue };
+            let level = Level {
+                w: grid.w,
+                h: grid.h,
+                image: Vec::new(),
+                hole: grid.hole.clone(),
+                avoid: grid.avoid.clone(),
+                labels: grid.labels.clone(),
+            };
+            let sources = level.info().iter().filter(|&&bits| bits & SOURCE != 0).count();
+            if sources < grid.hole.iter().filter(|&&x| x).count() {
+                // the plane's known pixels are too few or too scattered (its depth too noisy for
+                // membership) to lend whole patches: the image-space synthesis below does better
+                continue;
+            }
             let filled = self.fill_avoiding(&grid.image, &grid.hole, &grid.avoid, &grid.labels, grid.w, grid.h)?;
             let written = grid.write_back(&filled, &mut out, fill, labels, label, w, h);
             for (r, &done) in rest.iter_mut().zip(&written) {
@@ -254,7 +268,15 @@ impl ExemplarFill {
         }
         // the coarsest level starts from the surface-wise harmonic fill and a random field
         let coarsest = levels.last_mut().unwrap();
-        coarsest.image = fill_by_surface(&coarsest.image, &coarsest.hole, &coarsest.labels, coarsest.w, coarsest.h, 3);
+        // (avoided pixels are no boundary value either: the leftover's color would tint the hole)
+        let unknown: Vec<bool> = coarsest.hole.iter().zip(&coarsest.avoid).map(|(&h, &a)| h || a).collect();
+        let smooth = fill_by_surface(&coarsest.image, &unknown, &coarsest.labels, coarsest.w, coarsest.h, 3);
+        let n = coarsest.w * coarsest.h;
+        for i in (0..n).filter(|&i| coarsest.hole[i]) {
+            for c in 0..3 {
+                coarsest.image[c * n + i] = smooth[c * n + i];
+            }
+        }
         let mut rng = Rng::new(self.seed ^ 0x5eed_e8e3);
         let mut field: Option<(Vec<u32>, usize)> = None; // the coarser level's field and width
         let mut synthesized = false;

@@ -190,7 +190,7 @@ impl Completer {
         let disparity: Vec<f32> = anchored.depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect();
         let around: Vec<bool> = (0..w * h).map(|i| !fill[i] && covered[i]).collect();
         let planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
-        let labels = planes.labels(&anchored.depth, w);
+        let labels = planes.fill_labels(&anchored.depth, &fill, w);
         // the built-in inpainter fills again, surface by surface; a learned or provided
         // inpainting is kept, since it sees more than a surface label
         let rgb = match &self.inpainter {
