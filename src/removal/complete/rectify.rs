@@ -151,7 +151,10 @@ pub fn rectify(
     feet.sort_by(f64::total_cmp);
     let (lo, hi) = uvs.iter().fold((uvs[0], uvs[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let mut texel = feet[feet.len() / 2];
-    let side = |extent: f64, texel: f64| (extent / texel).ceil() as usize + 1;
+    if !(texel > 0.0 && texel.is_finite() && (hi - lo).is_finite()) {
+        return None; // a plane seen edge-on or at the horizon: nothing to rectify
+    }
+    let side = |extent: f64, texel: f64| ((extent / texel).ceil().min(1e9) as usize).saturating_add(1);
     // the hole's own box must fit with some context
     let hole_side = side((hi - lo).max_element(), texel);
     if hole_side > MAX_GRID / 2 {
