@@ -1,6 +1,6 @@
 //! Small image operations on planar float images (channel after channel, width * height each) and
-//! pixel masks: resizing, cropping, distances, mask dilation and feathering. Removal and evaluation
-//! use them once per view on the host; nothing here is per-iteration work.
+//! pixel masks: resizing, sampling, cropping, distances, mask dilation and feathering. Removal and
+//! evaluation use them once per view on the host; nothing here is per-iteration work.
 
 /// Bilinear resize of a planar image with `channels` planes (pixel centers aligned, edges clamped).
 pub fn resize_bilinear(src: &[f32], w: usize, h: usize, channels: usize, nw: usize, nh: usize) -> Vec<f32> {
@@ -23,6 +23,17 @@ pub fn resize_bilinear(src: &[f32], w: usize, h: usize, channels: usize, nw: usi
         }
     }
     out
+}
+
+/// Channel `c` of the planar image `img` (w x h) at the continuous point (x, y), pixel (px, py)
+/// centered at (px + 0.5, py + 0.5): bilinear, clamped to the edge pixels.
+pub fn sample_bilinear(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64) -> f32 {
+    let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
+    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+    let p = |xx: usize, yy: usize| img[c * w * h + yy * w + xx];
+    (1.0 - fy) * ((1.0 - fx) * p(x0, y0) + fx * p(x1, y0)) + fy * ((1.0 - fx) * p(x0, y1) + fx * p(x1, y1))
 }
 
 /// Nearest-neighbour resize of a mask.

@@ -57,27 +57,37 @@ fn masked_psnr(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
     10.0 * (n as f64 / se.max(1e-12)).log10()
 }
 
+/// `image` with the `hole` pixels set to 0.
+fn punched(image: &[f32], hole: &[bool]) -> Vec<f32> {
+    let mut out = image.to_vec();
+    for c in 0..3 {
+        for i in (0..W * H).filter(|&i| hole[i]) {
+            out[c * W * H + i] = 0.0;
+        }
+    }
+    out
+}
+
+fn assert_outside_unchanged(filled: &[f32], input: &[f32], hole: &[bool]) {
+    for c in 0..3 {
+        for i in (0..W * H).filter(|&i| !hole[i]) {
+            assert_eq!(filled[c * W * H + i], input[c * W * H + i], "pixel {i} outside the hole changed");
+        }
+    }
+}
+
 #[test]
 fn exemplar_fill_continues_bricks_and_checkerboard_into_the_hole() {
     let gpu = common::gpu();
     let (truth, labels) = scene();
     // a 24 x 20 hole across the wall/floor boundary
     let hole: Vec<bool> = (0..W * H).map(|i| (36..60).contains(&(i % W)) && (26..46).contains(&(i / W))).collect();
-    let mut input = truth.clone();
-    for c in 0..3 {
-        for i in (0..W * H).filter(|&i| hole[i]) {
-            input[c * W * H + i] = 0.0;
-        }
-    }
+    let input = punched(&truth, &hole);
     let ex = ExemplarFill::new(&gpu, 7).unwrap();
     let filled = ex.fill(&input, &hole, &labels, W, H).unwrap();
     let again = ex.fill(&input, &hole, &labels, W, H).unwrap();
     assert_eq!(filled, again, "the exemplar fill is deterministic");
-    for c in 0..3 {
-        for i in (0..W * H).filter(|&i| !hole[i]) {
-            assert_eq!(filled[c * W * H + i], input[c * W * H + i], "pixel {i} outside the hole changed");
-        }
-    }
+    assert_outside_unchanged(&filled, &input, &hole);
     let harmonic = fill_by_surface(&input, &hole, &labels, W, H, 3);
     let (pe, ph) = (masked_psnr(&filled, &truth, &hole), masked_psnr(&harmonic, &truth, &hole));
     // without surface labels texture may cross the boundary
@@ -130,11 +140,7 @@ fn exemplar_copies_no_texture_from_avoided_pixels() {
     let ex = ExemplarFill::new(&gpu, 7).unwrap();
     let avoiding = ex.fill_avoiding(&input, &hole, &leftover, &labels, W, H).unwrap();
     let plain = ex.fill(&input, &hole, &labels, W, H).unwrap();
-    for c in 0..3 {
-        for i in (0..W * H).filter(|&i| !hole[i]) {
-            assert_eq!(avoiding[c * W * H + i], input[c * W * H + i], "pixel {i} outside the hole changed");
-        }
-    }
+    assert_outside_unchanged(&avoiding, &input, &hole);
     let (with, without) = (green(&avoiding), green(&plain));
     eprintln!("green hole pixels: {with} avoiding the leftover, {without} without");
     assert_eq!(with, 0, "the leftover's color was copied into the hole");
@@ -186,21 +192,12 @@ fn rectified_fill_continues_a_receding_checkerboard_in_phase() {
         }
     }
     let hole: Vec<bool> = (0..W * H).map(|i| (36..60).contains(&(i % W)) && (40..58).contains(&(i / W))).collect();
-    let mut input = truth.clone();
-    for c in 0..3 {
-        for i in (0..W * H).filter(|&i| hole[i]) {
-            input[c * W * H + i] = 0.0;
-        }
-    }
+    let input = punched(&truth, &hole);
     let ex = ExemplarFill::new(&gpu, 7).unwrap();
     let none = vec![false; W * H];
     let rectified = ex.fill_rectified(&input, &hole, &none, &labels, &[plane], &k, W, H).unwrap();
     let in_image = ex.fill(&input, &hole, &labels, W, H).unwrap();
-    for c in 0..3 {
-        for i in (0..W * H).filter(|&i| !hole[i]) {
-            assert_eq!(rectified[c * W * H + i], input[c * W * H + i], "pixel {i} outside the hole changed");
-        }
-    }
+    assert_outside_unchanged(&rectified, &input, &hole);
     let harmonic = fill_by_surface(&input, &hole, &labels, W, H, 3);
     let (pr, pi, ph) = (
         masked_psnr(&rectified, &truth, &hole),

@@ -7,6 +7,7 @@
 //! through the same homography.
 
 use super::surfaces::Plane;
+use crate::image_ops::sample_bilinear;
 use crate::scene::Camera;
 use glam::{DVec2, DVec3};
 
@@ -198,20 +199,12 @@ pub fn rectify(
         let coarse = frame.footprint(xy.x, xy.y).is_none_or(|f| f > BLURRY_FOOTPRINT * texel);
         out.avoid[t] = avoid[p] || coarse;
         // bilinear among the surface's known pixels, nearest where a neighbour is not one
-        let (sx, sy) = (xy.x - 0.5, xy.y - 0.5);
-        let (x0, y0) = (sx.floor() as isize, sy.floor() as isize);
-        let (fx, fy) = ((sx - x0 as f64) as f32, (sy - y0 as f64) as f32);
+        let (x0, y0) = ((xy.x - 0.5).floor() as isize, (xy.y - 0.5).floor() as isize);
         let corners = [(x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)];
         let usable = corners.iter().all(|&(x, y)| ours(x, y) && !fill[y as usize * w + x as usize]);
         for c in 0..3 {
-            out.image[c * n + t] = if usable {
-                let v = |(x, y): (isize, isize)| image[c * w * h + y as usize * w + x as usize];
-                let top = v(corners[0]) * (1.0 - fx) + v(corners[1]) * fx;
-                let bottom = v(corners[2]) * (1.0 - fx) + v(corners[3]) * fx;
-                top * (1.0 - fy) + bottom * fy
-            } else {
-                image[c * w * h + p]
-            };
+            out.image[c * n + t] =
+                if usable { sample_bilinear(image, w, h, c, xy.x, xy.y) } else { image[c * w * h + p] };
         }
     }
     Some(out)
@@ -232,7 +225,7 @@ impl Rectified {
         iw: usize,
         ih: usize,
     ) -> Vec<bool> {
-        let (gw, gh, n) = (self.w, self.h, self.w * self.h);
+        let (gw, gh) = (self.w, self.h);
         let mut written = vec![false; iw * ih];
         for p in (0..iw * ih).filter(|&p| fill[p] && labels[p] == label) {
             // the mean over SUB x SUB points of the pixel: a far pixel covers many texels
@@ -242,17 +235,9 @@ impl Rectified {
                 let x = (p % iw) as f64 + ((k % SUB) as f64 + 0.5) / SUB as f64;
                 let y = (p / iw) as f64 + ((k / SUB) as f64 + 0.5) / SUB as f64;
                 let Some(uv) = self.frame.to_plane(x, y) else { continue };
-                let g = (uv - self.corner) / self.texel - DVec2::splat(0.5);
-                let gx = g.x.clamp(0.0, (gw - 1) as f64);
-                let gy = g.y.clamp(0.0, (gh - 1) as f64);
-                let (x0, y0) = (gx.floor() as usize, gy.floor() as usize);
-                let (x1, y1) = ((x0 + 1).min(gw - 1), (y0 + 1).min(gh - 1));
-                let (fx, fy) = ((gx - x0 as f64) as f32, (gy - y0 as f64) as f32);
+                let g = (uv - self.corner) / self.texel;
                 for (c, a) in acc.iter_mut().enumerate() {
-                    let v = |x: usize, y: usize| filled[c * n + y * gw + x];
-                    let top = v(x0, y0) * (1.0 - fx) + v(x1, y0) * fx;
-                    let bottom = v(x0, y1) * (1.0 - fx) + v(x1, y1) * fx;
-                    *a += top * (1.0 - fy) + bottom * fy;
+                    *a += sample_bilinear(filled, gw, gh, c, g.x, g.y);
                 }
                 samples += 1;
             }

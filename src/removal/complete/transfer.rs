@@ -5,6 +5,7 @@
 //! puts the point where the other view really saw it, so this is where depth guidance pays off in
 //! color, not just in geometry.
 
+use crate::image_ops::sample_bilinear;
 use crate::scene::Camera;
 
 /// One edited view as the other views see it.
@@ -24,15 +25,6 @@ pub struct Transfer {
     /// Planar RGB, valid where `found`.
     pub rgb: Vec<f32>,
     pub found: Vec<bool>,
-}
-
-fn bilinear(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64) -> f32 {
-    let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-    let p = |xx: usize, yy: usize| img[c * w * h + yy * w + xx];
-    (1.0 - fy) * ((1.0 - fx) * p(x0, y0) + fx * p(x1, y0)) + fy * ((1.0 - fx) * p(x0, y1) + fx * p(x1, y1))
 }
 
 /// Transfers colors into the `fill` pixels (the pipeline passes the whole hole) of view `target` (camera, completed depth) from the
@@ -82,7 +74,7 @@ pub fn transfer(
                 continue;
             }
             for c in 0..3 {
-                out.rgb[c * w * h + p] = bilinear(s.photo, sw, sh, c, x, y);
+                out.rgb[c * w * h + p] = sample_bilinear(s.photo, sw, sh, c, x, y);
             }
             out.found[p] = true;
             break;
