@@ -361,12 +361,18 @@ mod tests {
         (floor, wall, d)
     }
 
+    /// A hole across the room's crease (for 64 x 48), and the pixels around it.
+    fn hole_across_the_crease(w: usize, h: usize) -> (Vec<bool>, Vec<bool>) {
+        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
+        let known = hole.iter().map(|&m| !m).collect();
+        (hole, known)
+    }
+
     #[test]
     fn ransac_finds_both_planes_and_the_crease() {
         let (w, h) = (64, 48);
         let (floor, wall, disp) = room(w, h);
-        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
-        let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+        let (hole, known) = hole_across_the_crease(w, h);
         let s = surfaces_around(&disp, &known, &hole, w, h, 7);
         assert_eq!(s.planes.len(), 2, "{:?}", s.planes);
         assert!(s.nearest_first);
@@ -402,8 +408,7 @@ mod tests {
     fn labels_tolerate_scattered_depth_and_fill_pixels_take_the_visible_plane() {
         let (w, h) = (64, 48);
         let (_, _, disp) = room(w, h);
-        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
-        let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+        let (hole, known) = hole_across_the_crease(w, h);
         let s = surfaces_around(&disp, &known, &hole, w, h, 7);
         let exact: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
         let truth = s.labels(&exact, w);
@@ -436,8 +441,7 @@ mod tests {
     fn colors_do_not_cross_surfaces() {
         let (w, h) = (64, 48);
         let (_, _, disp) = room(w, h);
-        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
-        let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+        let (hole, known) = hole_across_the_crease(w, h);
         let s = surfaces_around(&disp, &known, &hole, w, h, 7);
         let depth: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
         let labels = s.labels(&depth, w);
