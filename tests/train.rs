@@ -197,3 +197,107 @@ fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
     assert!(moved > 0.5 * radius as f64, "geometry barely moved ({moved}): the bound was not exercised");
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }
+
+/// The fused projection-backward + Adam pass (train/fused.rs) against the passes it replaces
+/// (projection backward into zeroed gradients, the MCMC regularizer, Adam per tensor), from the same
+/// scene over several steps: SH degree 3 with its bands growing or all in use, Gaussians the views
+/// cull, frozen groups, both strategies.
+#[test]
+fn fused_step_matches_the_passes_apart() {
+    use cogeo::gpu::{DeviceChoice, Gpu};
+    use cogeo::rng::Rng;
+    use cogeo::scene::{Camera, GaussianScene};
+    use cogeo::train::dataset::{Dataset, View};
+    use cogeo::train::trainer::{Frozen, Strategy, TrainConfig, Trainer};
+    let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
+    let gpu = Gpu::new(&DeviceChoice { selector: None, validate, memory_limit_mib: None }).unwrap();
+    let mut rng = Rng::new(7);
+    let mut scene = GaussianScene { sh_degree: 3, ..Default::default() };
+    for i in 0..400 {
+        // one in eight far to the side: culled by both views
+        let side = if i % 8 == 0 { 6.0 } else { 0.0 };
+        scene.means.push([
+            (rng.range(-1.0, 1.0) + side) as f32,
+            rng.range(-0.8, 0.8) as f32,
+            rng.range(-0.5, 0.5) as f32,
+        ]);
+        scene.normals.push([0.0; 3]);
+        scene.log_scales.push([rng.range(-3.0, -2.0) as f32, rng.range(-3.0, -2.0) as f32, -2.5]);
+        scene.quats.push([1.0, rng.range(-0.3, 0.3) as f32, rng.range(-0.3, 0.3) as f32, 0.1]);
+        scene.opacity_logits.push(rng.range(-1.0, 1.0) as f32);
+        scene.sh.extend((0..48).map(|_| (0.3 * rng.normal()) as f32));
+    }
+    let view = |name: &str, eye: [f64; 3], rng: &mut Rng| View {
+        camera: Camera::look_at(name, 40, 30, 60.0, eye, [0.0; 3], [0.0, -1.0, 0.0]),
+        image: (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect(),
+        path: name.into(),
+    };
+    let train = vec![view("a", [0.0, -0.2, -3.0], &mut rng), view("b", [0.8, -0.4, -2.8], &mut rng)];
+    let data = Dataset { train, test: vec![], points: vec![], extent: 2.0, warnings: vec![], pose_check: None };
+    let some_frozen = Frozen { quats: true, opacity: true, ..Default::default() };
+    // (name, strategy, all SH bands from the start, frozen groups, the fused pass accumulates with
+    // compare-and-swap)
+    let cases = [
+        ("ADC, SH bands growing", Strategy::Adc, false, Frozen::default(), false),
+        ("ADC, all SH bands", Strategy::Adc, true, Frozen::default(), false),
+        ("ADC, all SH bands, compare-and-swap", Strategy::Adc, true, Frozen::default(), true),
+        ("MCMC, all SH bands", Strategy::Mcmc, true, Frozen::default(), false),
+        ("MCMC, rotations and opacity frozen", Strategy::Mcmc, true, some_frozen, false),
+    ];
+    for (name, strategy, full_sh, frozen, cas) in cases {
+        let run = |fused: bool| {
+            let cfg = TrainConfig { iters: 100, densify: false, strategy, seed: 5, ..Default::default() };
+            let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
+            if fused && cas {
+                t.force_compare_and_swap().unwrap();
+            }
+            t.fused_step = fused;
+            t.full_sh = full_sh;
+            t.frozen = frozen;
+            for _ in 0..4 {
+                t.iterate(&data, false).unwrap();
+            }
+            let s = t.download_scene().unwrap();
+            let mut all: Vec<Vec<f32>> = vec![
+                s.means.as_flattened().to_vec(),
+                s.log_scales.as_flattened().to_vec(),
+                s.quats.as_flattened().to_vec(),
+                s.opacity_logits.clone(),
+                s.sh.clone(),
+            ];
+            for (m, v) in t.moments_host().unwrap() {
+                all.push(m);
+                all.push(v);
+            }
+            all
+        };
+        let (fused, apart) = (run(true), run(false));
+        let initial = [
+            scene.means.as_flattened(),
+            scene.log_scales.as_flattened(),
+            scene.quats.as_flattened(),
+            &scene.opacity_logits,
+            &scene.sh,
+        ];
+        let frozen_groups = [frozen.means, frozen.log_scales, frozen.quats, frozen.opacity, frozen.sh];
+        let names = ["means", "log_scales", "quats", "opacity", "sh"];
+        for (i, (a, b)) in fused.iter().zip(&apart).enumerate() {
+            let group = if i < 5 { i } else { (i - 5) / 2 };
+            let label =
+                if i < 5 { names[i].to_string() } else { format!("{} {}", names[group], ["m", "v"][(i - 5) % 2]) };
+            let scale = b.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+            let worst = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+            println!("{name}: {label}: max |fused - apart| {worst:.3e}, max |value| {scale:.3e}");
+            // measured at most 8e-8 of the tensor's largest value (float-atomic order and rounding)
+            assert!(worst <= 2e-6 * scale, "{name}: {label} differs by {worst:.3e} (largest value {scale:.3e})");
+            if i < 5 {
+                let moved = a.iter().zip(initial[i]).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+                match frozen_groups[i] {
+                    true => assert_eq!(moved, 0.0, "{name}: frozen {label} moved"),
+                    false => assert!(moved > 1e-4, "{name}: {label} barely moved ({moved:.2e})"),
+                }
+            }
+        }
+    }
+    assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
+}

@@ -201,7 +201,6 @@ impl Backward {
     /// Records the backward of the last forward pass whose parameter block is `render_params` (the
     /// rasterizer's, still holding that frame): pixel gradients to per-view projected gradients,
     /// then to `grads` (accumulated). `features_only` skips the geometry and color passes.
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
         rec: &mut Recorder,
@@ -210,6 +209,41 @@ impl Backward {
         upstream: &PixelGradients,
         grads: &SceneGradients,
         features_only: bool,
+    ) -> Result<()> {
+        let project = !features_only;
+        self.record_passes(rec, render_params, frame, upstream, grads, features_only, project)
+    }
+
+    /// As `record` without the projection backward: the blend backward leaves the per-view
+    /// gradients of the projected quantities for a pass that consumes them through `params()`
+    /// (train::fused, which feeds them straight to Adam). `grads` then only receives the
+    /// densification statistics, from that pass.
+    pub fn record_to_projected(
+        &mut self,
+        rec: &mut Recorder,
+        render_params: &Buffer,
+        frame: &RenderParams,
+        upstream: &PixelGradients,
+        grads: &SceneGradients,
+    ) -> Result<()> {
+        self.record_passes(rec, render_params, frame, upstream, grads, false, false)
+    }
+
+    /// The parameter block (`BackwardParams`) of the last recorded backward.
+    pub fn params(&self) -> &Buffer {
+        &self.params
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn record_passes(
+        &mut self,
+        rec: &mut Recorder,
+        render_params: &Buffer,
+        frame: &RenderParams,
+        upstream: &PixelGradients,
+        grads: &SceneGradients,
+        features_only: bool,
+        project: bool,
     ) -> Result<()> {
         self.reserve(frame.num_gaussians)?;
         if upstream.features.is_some() {
@@ -251,6 +285,8 @@ impl Backward {
         if !features_only {
             rec.dispatch(&self.blend, &push, dispatch_1d(tiles));
             rec.mark("blend backward");
+        }
+        if project {
             rec.dispatch(&self.project, &push, dispatch_1d(frame.num_gaussians.div_ceil(256)));
             rec.mark("project backward");
         }

@@ -12,7 +12,7 @@ pub const EPS: f32 = 1e-15;
 /// The scalars of one Adam step of one tensor; mirrors `AdamStep` in include/adam_step.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct AdamStep {
+pub(crate) struct AdamStep {
     n: u32,
     lr: f32,
     beta1: f32,
@@ -27,7 +27,7 @@ struct AdamStep {
 
 impl AdamStep {
     /// Step `step` (from 1) over `n` elements; `rates` = (lr, period, head, lr_tail).
-    fn new(n: u32, rates: (f32, u32, u32, f32), step: u32) -> AdamStep {
+    pub(crate) fn new(n: u32, rates: (f32, u32, u32, f32), step: u32) -> AdamStep {
         let (lr, period, head, lr_tail) = rates;
         AdamStep {
             n,

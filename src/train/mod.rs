@@ -3,6 +3,7 @@
 pub mod adam;
 pub mod checkpoint;
 pub mod dataset;
+pub mod fused;
 pub mod loss;
 pub mod mcmc;
 pub mod trainer;

@@ -1,13 +1,15 @@
 //! The training loop: per iteration one training view is rendered (forward passes), the photometric
-//! loss and its gradient are computed, the backward passes accumulate parameter gradients and Adam
-//! updates every parameter group with its INRIA learning rate (conventions.md). SH degree grows by one
-//! every 1000 iterations. Densification runs on the host every 100 iterations, carrying the Adam
-//! moments of surviving Gaussians: INRIA clone / split / prune with opacity resets (`Strategy::Adc`),
-//! or 3DGS-MCMC relocation and growth to the budget (`Strategy::Mcmc`, train/mcmc.rs, which also adds
-//! a regularizer pass before Adam and a noise pass after it).
+//! loss and its gradient are computed, and the backward passes end in Adam updating every parameter
+//! group with its INRIA learning rate (conventions.md): inside the projection backward
+//! (train/fused.rs), or, for a trust-region step, on accumulated gradients per tensor. SH degree
+//! grows by one every 1000 iterations. Densification runs on the host every 100 iterations, carrying
+//! the Adam moments of surviving Gaussians: INRIA clone / split / prune with opacity resets
+//! (`Strategy::Adc`), or 3DGS-MCMC relocation and growth to the budget (`Strategy::Mcmc`,
+//! train/mcmc.rs, which also adds regularizer gradients before Adam and a noise pass after it).
 
 use super::adam::{Adam, Moments};
 use super::dataset::{Dataset, View};
+use super::fused::{GroupStep, ProjectBackwardAdam};
 use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
 use super::mcmc::{self, McmcPasses, RelocationStats};
 use crate::gpu::{Buffer, Gpu, Recorder};
@@ -183,6 +185,10 @@ pub struct Trainer {
     /// Render with the scene's full SH degree from the first step (fine-tuning a trained scene)
     /// instead of growing it one band per 1000 iterations.
     pub full_sh: bool,
+    /// Apply Adam inside the projection backward (train/fused.rs) instead of writing the parameter
+    /// gradients and running Adam per tensor; on by default, ignored for a trust-region step.
+    pub fused_step: bool,
+    fused: ProjectBackwardAdam,
     mcmc: McmcPasses,
     /// What the last MCMC relocation did.
     pub last_relocation: RelocationStats,
@@ -201,6 +207,7 @@ impl Trainer {
         let buffers = SceneBuffers::upload(gpu, scene, None)?;
         let grads = SceneGradients::new(gpu, &buffers)?;
         let k = sh_coeffs(scene.sh_degree) as u32;
+        let backward = Backward::new(gpu, false)?;
         Ok(Trainer {
             gpu: gpu.clone(),
             extent: dataset.extent,
@@ -208,7 +215,6 @@ impl Trainer {
             scene: buffers,
             grads,
             raster: Rasterizer::new(gpu)?,
-            backward: Backward::new(gpu, false)?,
             loss: PhotometricLoss::new(gpu)?,
             adam: Adam::new(gpu)?,
             targets: Buffer::from_slice(gpu, "training images", &all)?,
@@ -222,6 +228,9 @@ impl Trainer {
             frozen: Frozen::default(),
             trust_radius: None,
             full_sh: false,
+            fused_step: true,
+            fused: ProjectBackwardAdam::new(gpu, backward.uses_cas)?,
+            backward,
             mcmc: McmcPasses::new(gpu)?,
             last_relocation: RelocationStats::default(),
             last_timings: Vec::new(),
@@ -270,7 +279,10 @@ impl Trainer {
         // iteration is two submissions (the first ends at the one readback, the intersection count)
         let (frame, mut rec) = self.raster.forward_open(&self.scene, &view.camera, &settings)?;
         let outputs = self.raster.outputs().unwrap();
-        self.grads.record_zero_parameters(&mut rec);
+        let fused = self.fused_step && self.trust_radius.is_none();
+        if !fused {
+            self.grads.record_zero_parameters(&mut rec);
+        }
         let inputs = LossInputs {
             render: outputs.rgb,
             target: &self.targets,
@@ -280,51 +292,27 @@ impl Trainer {
         self.loss.record(&mut rec, view.camera.width, view.camera.height, &inputs)?;
         let upstream =
             PixelGradients { rgb: self.loss.dl_drgb(), alpha: None, depth: None, expected_depth: None, features: None };
-        self.backward.record(&mut rec, self.raster.params_buffer(), &frame.params, &upstream, &self.grads, false)?;
-        let s = &self.scene;
-        let g = &self.grads;
-        let m = &self.moments;
-        let k = sh_coeffs(s.sh_degree) as u32;
+        let render_params = self.raster.params_buffer();
+        if fused {
+            self.backward.record_to_projected(&mut rec, render_params, &frame.params, &upstream, &self.grads)?;
+        } else {
+            self.backward.record(&mut rec, render_params, &frame.params, &upstream, &self.grads, false)?;
+        }
         let f = self.frozen;
         let mcmc = self.cfg.strategy == Strategy::Mcmc;
-        if mcmc {
-            let w_o = if f.opacity { 0.0 } else { mcmc::OPACITY_REG };
-            let w_s = if f.log_scales { 0.0 } else { mcmc::SCALE_REG };
-            self.mcmc.record_regularize(&mut rec, s, g, (w_o, w_s));
+        let regularizer = if mcmc {
+            (if f.opacity { 0.0 } else { mcmc::OPACITY_REG }, if f.log_scales { 0.0 } else { mcmc::SCALE_REG })
+        } else {
+            (0.0, 0.0)
+        };
+        if fused {
+            self.record_fused_step(&mut rec, regularizer)?;
+        } else {
+            self.record_adam_apart(&mut rec, mcmc, regularizer)?;
         }
-        // bytes of the Adam passes; a clipped step also writes and reads back its update
-        let adam_elements = |frozen: bool, m: &super::adam::Moments| if frozen { 0 } else { m.len as u64 };
-        let geometry_bytes = super::adam::BYTES_PER_ELEMENT + if self.trust_radius.is_some() { 8 } else { 0 };
-        let adam_bytes = geometry_bytes
-            * (adam_elements(f.means, &m.means)
-                + adam_elements(f.log_scales, &m.log_scales)
-                + adam_elements(f.quats, &m.quats))
-            + super::adam::BYTES_PER_ELEMENT
-                * (adam_elements(f.opacity, &m.opacity_logits) + adam_elements(f.sh, &m.sh));
-        let geometry = [
-            (f.means, &s.means, &g.means, &m.means, self.position_lr()),
-            (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE),
-            (f.quats, &s.quats, &g.quats, &m.quats, LR_ROTATION),
-        ];
-        for (slot, (frozen, param, grad, moments, lr)) in geometry.into_iter().enumerate() {
-            match (frozen, self.trust_radius) {
-                (true, _) => {}
-                (false, Some(radius)) => {
-                    self.adam.record_clipped(&mut rec, param, grad, moments, (lr, 1, 1, lr), self.step, radius, slot)?
-                }
-                (false, None) => self.adam.record(&mut rec, param, grad, moments, lr, self.step),
-            }
-        }
-        if !f.opacity {
-            self.adam.record(&mut rec, &s.opacity_logits, &g.opacity_logits, &m.opacity_logits, LR_OPACITY, self.step);
-        }
-        if !f.sh {
-            self.adam.record_split(&mut rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
-        }
-        rec.mark_moved("adam", adam_bytes);
         if mcmc && !f.means {
             let seed = (self.cfg.seed as u32).wrapping_mul(0x9e37_79b9) ^ self.step;
-            self.mcmc.record_noise(&mut rec, s, mcmc::NOISE_LR * self.position_lr(), seed);
+            self.mcmc.record_noise(&mut rec, &self.scene, mcmc::NOISE_LR * self.position_lr(), seed);
             rec.mark("mcmc noise");
         }
         let mut timings = frame.timings;
@@ -345,6 +333,76 @@ impl Trainer {
                 self.reset_opacity()?;
             }
         }
+        Ok(())
+    }
+
+    /// Accumulate gradients with compare-and-swap even where float atomics exist (tests of the
+    /// `_cas` shader variants).
+    pub fn force_compare_and_swap(&mut self) -> Result<()> {
+        self.backward = Backward::new(&self.gpu, true)?;
+        self.fused = ProjectBackwardAdam::new(&self.gpu, true)?;
+        Ok(())
+    }
+
+    /// Projection backward and Adam of every group in one pass (train/fused.rs).
+    fn record_fused_step(&mut self, rec: &mut Recorder, regularizer: (f32, f32)) -> Result<()> {
+        let (s, m, f) = (&self.scene, &self.moments, self.frozen);
+        let group = |moments, lr, lr_tail, frozen| GroupStep { moments, lr, lr_tail, frozen };
+        let groups = [
+            group(&m.means, self.position_lr(), self.position_lr(), f.means),
+            group(&m.log_scales, LR_SCALE, LR_SCALE, f.log_scales),
+            group(&m.quats, LR_ROTATION, LR_ROTATION, f.quats),
+            group(&m.opacity_logits, LR_OPACITY, LR_OPACITY, f.opacity),
+            group(&m.sh, LR_SH_DC, LR_SH_REST, f.sh),
+        ];
+        let params = self.raster.params_buffer();
+        self.fused.record(rec, params, self.backward.params(), s, &groups, regularizer, self.step)?;
+        let k = sh_coeffs(s.sh_degree) as u32;
+        rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(k));
+        Ok(())
+    }
+
+    /// The MCMC regularizer and Adam per tensor on the accumulated parameter gradients; geometry
+    /// steps clipped to the trust radius when one is set.
+    fn record_adam_apart(&mut self, rec: &mut Recorder, mcmc: bool, regularizer: (f32, f32)) -> Result<()> {
+        let s = &self.scene;
+        let g = &self.grads;
+        let m = &self.moments;
+        let k = sh_coeffs(s.sh_degree) as u32;
+        let f = self.frozen;
+        if mcmc {
+            self.mcmc.record_regularize(rec, s, g, regularizer);
+        }
+        // bytes of the Adam passes; a clipped step also writes and reads back its update
+        let adam_elements = |frozen: bool, m: &super::adam::Moments| if frozen { 0 } else { m.len as u64 };
+        let geometry_bytes = super::adam::BYTES_PER_ELEMENT + if self.trust_radius.is_some() { 8 } else { 0 };
+        let adam_bytes = geometry_bytes
+            * (adam_elements(f.means, &m.means)
+                + adam_elements(f.log_scales, &m.log_scales)
+                + adam_elements(f.quats, &m.quats))
+            + super::adam::BYTES_PER_ELEMENT
+                * (adam_elements(f.opacity, &m.opacity_logits) + adam_elements(f.sh, &m.sh));
+        let geometry = [
+            (f.means, &s.means, &g.means, &m.means, self.position_lr()),
+            (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE),
+            (f.quats, &s.quats, &g.quats, &m.quats, LR_ROTATION),
+        ];
+        for (slot, (frozen, param, grad, moments, lr)) in geometry.into_iter().enumerate() {
+            match (frozen, self.trust_radius) {
+                (true, _) => {}
+                (false, Some(radius)) => {
+                    self.adam.record_clipped(rec, param, grad, moments, (lr, 1, 1, lr), self.step, radius, slot)?
+                }
+                (false, None) => self.adam.record(rec, param, grad, moments, lr, self.step),
+            }
+        }
+        if !f.opacity {
+            self.adam.record(rec, &s.opacity_logits, &g.opacity_logits, &m.opacity_logits, LR_OPACITY, self.step);
+        }
+        if !f.sh {
+            self.adam.record_split(rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
+        }
+        rec.mark_moved("adam", adam_bytes);
         Ok(())
     }
 

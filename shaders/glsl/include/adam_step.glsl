@@ -1,5 +1,6 @@
-// One Adam step of one element, shared by adam.comp and adam_update.comp so both follow PyTorch's
-// formulation (as the INRIA reference uses) exactly:
+// One Adam step of one element, shared by adam.comp, adam_update.comp and
+// project_backward_adam.comp so all follow PyTorch's formulation (as the INRIA reference uses)
+// exactly:
 //   m = b1 m + (1 - b1) g,  v = b2 v + (1 - b2) g^2,
 //   u = rate * (m / (1 - b1^t)) / (sqrt(v / (1 - b2^t)) + eps)
 // The host passes the bias corrections. Element i uses `lr` when i % period < head and `lr_tail`
@@ -14,12 +15,17 @@ float adam_rate(uint i, AdamStep s) {
     return (i % s.period) < s.head ? s.lr : s.lr_tail;
 }
 
-// Updates the moments of element i and returns its update u (to be subtracted) at `rate`.
-float adam_update(Floats grad, Floats m, Floats v, uint i, AdamStep s, float rate) {
-    float g = grad.v[i];
+// Updates the moments of element i with gradient g and returns its update u (to be subtracted)
+// at `rate`.
+float adam_update_value(float g, Floats m, Floats v, uint i, AdamStep s, float rate) {
     float mi = s.beta1 * m.v[i] + (1.0 - s.beta1) * g;
     float vi = s.beta2 * v.v[i] + (1.0 - s.beta2) * g * g;
     m.v[i] = mi;
     v.v[i] = vi;
     return rate * (mi / s.bias1) / (sqrt(vi / s.bias2) + s.eps);
+}
+
+// As adam_update_value, with the gradient read from grad[i].
+float adam_update(Floats grad, Floats m, Floats v, uint i, AdamStep s, float rate) {
+    return adam_update_value(grad.v[i], m, v, i, s, rate);
 }

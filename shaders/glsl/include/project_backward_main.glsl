@@ -1,174 +1,29 @@
-// Backward of project.comp, one thread per Gaussian: from the per-view gradients of the 2D mean,
-// conic, activated opacity, color and depth to the stored parameters (mean, log scale, quaternion,
-// opacity logit, SH coefficients, including the view-direction path of SH). Accumulates into the
-// parameter gradients over views, updates the densification statistics, and clears the per-view
-// gradients for the next view.
+// Backward of project.comp, one thread per Gaussian: the parameter gradients of the view just
+// blended (project_backward_grads.glsl), accumulated into the parameter gradients over views.
 #ifndef NO_FLOAT_ATOMICS
 #extension GL_EXT_shader_atomic_float : require
 #endif
-#include "common.glsl"
-#include "render_params.glsl"
-#include "backward_params.glsl"
-#include "sh.glsl"
-#include "quat.glsl"
+#include "project_backward_grads.glsl"
 
 layout(local_size_x = 256) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; };
 
-// d(basis_k)/d(direction), rows k = 0..15, for the unit direction d.
-void sh_basis_grad(vec3 d, uint degree, out vec3 g[16]) {
-    for (int i = 0; i < 16; i++) g[i] = vec3(0.0);
-    if (degree < 1) return;
-    float x = d.x, y = d.y, z = d.z;
-    g[1] = vec3(0.0, -SH_C1, 0.0);
-    g[2] = vec3(0.0, 0.0, SH_C1);
-    g[3] = vec3(-SH_C1, 0.0, 0.0);
-    if (degree < 2) return;
-    float xx = x * x, yy = y * y, zz = z * z;
-    g[4] = SH_C2[0] * vec3(y, x, 0.0);
-    g[5] = SH_C2[1] * vec3(0.0, z, y);
-    g[6] = SH_C2[2] * vec3(-2.0 * x, -2.0 * y, 4.0 * z);
-    g[7] = SH_C2[3] * vec3(z, 0.0, x);
-    g[8] = SH_C2[4] * vec3(2.0 * x, -2.0 * y, 0.0);
-    if (degree < 3) return;
-    g[9] = SH_C3[0] * vec3(6.0 * x * y, 3.0 * xx - 3.0 * yy, 0.0);
-    g[10] = SH_C3[1] * vec3(y * z, x * z, x * y);
-    g[11] = SH_C3[2] * vec3(-2.0 * x * y, 4.0 * zz - xx - 3.0 * yy, 8.0 * y * z);
-    g[12] = SH_C3[3] * vec3(-6.0 * x * z, -6.0 * y * z, 6.0 * zz - 3.0 * xx - 3.0 * yy);
-    g[13] = SH_C3[4] * vec3(4.0 * zz - 3.0 * xx - yy, -2.0 * x * y, 8.0 * x * z);
-    g[14] = SH_C3[5] * vec3(2.0 * x * z, -2.0 * y * z, xx - yy);
-    g[15] = SH_C3[6] * vec3(3.0 * xx - 3.0 * yy, -6.0 * x * y, 0.0);
-}
-
 void main() {
     uint g = linear_group_id() * 256 + gl_LocalInvocationID.x;
     if (g >= p.num_gaussians) return;
-    if (p.tiles_touched.v[g] == 0) return;  // culled or off-screen: no gradient, nothing accumulated
-
-    vec2 dl_dxy = vec2(grad_read(b.grad_xy, 2 * g), grad_read(b.grad_xy, 2 * g + 1));
-    vec3 dl_dconic = vec3(grad_read(b.grad_conic, 3 * g), grad_read(b.grad_conic, 3 * g + 1), grad_read(b.grad_conic, 3 * g + 2));
-    float dl_dopacity = grad_read(b.grad_opacity, g);
-    vec3 dl_dcolor = vec3(grad_read(b.grad_color, 3 * g), grad_read(b.grad_color, 3 * g + 1), grad_read(b.grad_color, 3 * g + 2));
-    float dl_dz = grad_read(b.grad_depth, g);
-    grad_clear(b.grad_xy, 2 * g); grad_clear(b.grad_xy, 2 * g + 1);
-    grad_clear(b.grad_conic, 3 * g); grad_clear(b.grad_conic, 3 * g + 1); grad_clear(b.grad_conic, 3 * g + 2);
-    grad_clear(b.grad_opacity, g);
-    grad_clear(b.grad_color, 3 * g); grad_clear(b.grad_color, 3 * g + 1); grad_clear(b.grad_color, 3 * g + 2);
-    grad_clear(b.grad_depth, g);
-
-    // densification statistic: |dL/d(mean2d)| in NDC units (pixel gradient times W/2, H/2)
-    b.grad_xy_norm_sum.v[g] += length(dl_dxy * vec2(0.5 * float(p.width), 0.5 * float(p.height)));
-    b.grad_xy_views.v[g] += 1;
-
-    // ---- recompute the forward quantities
-    vec3 m = vec3(p.means.v[3 * g], p.means.v[3 * g + 1], p.means.v[3 * g + 2]);
-    mat3 Rv = mat3(p.viewmat[0], p.viewmat[4], p.viewmat[8],
-                   p.viewmat[1], p.viewmat[5], p.viewmat[9],
-                   p.viewmat[2], p.viewmat[6], p.viewmat[10]);
-    vec3 pv = Rv * m + vec3(p.viewmat[3], p.viewmat[7], p.viewmat[11]);
-    vec4 q_raw = vec4(p.quats.v[4 * g], p.quats.v[4 * g + 1], p.quats.v[4 * g + 2], p.quats.v[4 * g + 3]);
-    float q_norm = length(q_raw);
-    vec4 q = q_raw / q_norm;
-    float w = q.x, x = q.y, y = q.z, z = q.w;
-    mat3 Rq = quat_to_rotation(q);
-    vec3 s = exp(vec3(p.log_scales.v[3 * g], p.log_scales.v[3 * g + 1], p.log_scales.v[3 * g + 2]));
-    mat3 M = Rq * mat3(s.x, 0, 0, 0, s.y, 0, 0, 0, s.z);
-    mat3 cov_world = M * transpose(M);
-    mat3 cov_view = Rv * cov_world * transpose(Rv);
-    float lim_x = 1.3 * p.tan_fovx, lim_y = 1.3 * p.tan_fovy;
-    float rz = 1.0 / pv.z, rz2 = rz * rz;
-    float ux = pv.x * rz, uy = pv.y * rz;
-    bool free_x = abs(ux) <= lim_x, free_y = abs(uy) <= lim_y;
-    float cux = clamp(ux, -lim_x, lim_x), cuy = clamp(uy, -lim_y, lim_y);
-    mat3x2 J = mat3x2(p.fx * rz, 0.0, 0.0, p.fy * rz, -p.fx * cux * rz, -p.fy * cuy * rz);
-    vec3 conic = vec3(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1], p.conic_opacity.v[4 * g + 2]);
-    float opacity = p.conic_opacity.v[4 * g + 3];
-
-    vec3 dl_dpv = vec3(0.0);
-    vec3 dl_dm = vec3(0.0);
-
-    // ---- opacity
-    float dl_dlogit = dl_dopacity * opacity * (1.0 - opacity);
-
-    // ---- color from SH, with the view-direction path
-    vec3 dir_raw = m - vec3(p.campos[0], p.campos[1], p.campos[2]);
-    float dir_len = length(dir_raw);
-    vec3 dir = dir_raw / dir_len;
-    float basis[16];
-    sh_basis(dir, p.sh_degree, basis);
+    ParamGrads d;
+    if (!parameter_grads(p, b, g, d)) return;
     uint K = p.sh_coeffs;
-    uint nb = min((p.sh_degree + 1) * (p.sh_degree + 1), K);
-    vec3 raw = vec3(0.0);
-    for (uint k = 0; k < nb; k++) {
+    for (uint k = 0; k < d.bands; k++) {
         uint base = (g * K + k) * 3;
-        raw += basis[k] * vec3(p.sh.v[base], p.sh.v[base + 1], p.sh.v[base + 2]);
+        b.grad_sh.v[base] += d.basis[k] * d.color_raw.x;
+        b.grad_sh.v[base + 1] += d.basis[k] * d.color_raw.y;
+        b.grad_sh.v[base + 2] += d.basis[k] * d.color_raw.z;
     }
-    // max(raw + 0.5, 0): no gradient where the clamp is active
-    vec3 dl_draw = mix(vec3(0.0), dl_dcolor, greaterThanEqual(raw + 0.5, vec3(0.0)));
-    vec3 basis_grad[16];
-    sh_basis_grad(dir, p.sh_degree, basis_grad);
-    vec3 dl_ddir = vec3(0.0);
-    for (uint k = 0; k < nb; k++) {
-        uint base = (g * K + k) * 3;
-        vec3 coeff = vec3(p.sh.v[base], p.sh.v[base + 1], p.sh.v[base + 2]);
-        b.grad_sh.v[base] += basis[k] * dl_draw.x;
-        b.grad_sh.v[base + 1] += basis[k] * dl_draw.y;
-        b.grad_sh.v[base + 2] += basis[k] * dl_draw.z;
-        dl_ddir += dot(dl_draw, coeff) * basis_grad[k];
-    }
-    dl_dm += (dl_ddir - dir * dot(dir, dl_ddir)) / dir_len;
-
-    // ---- depth and 2D mean
-    dl_dpv.z += dl_dz;
-    dl_dpv.x += p.fx * rz * dl_dxy.x;
-    dl_dpv.y += p.fy * rz * dl_dxy.y;
-    dl_dpv.z += -p.fx * pv.x * rz2 * dl_dxy.x - p.fy * pv.y * rz2 * dl_dxy.y;
-
-    // ---- conic = inverse(cov2d): dcov2d = -conic G conic, G the symmetric gradient matrix
-    mat2 C = mat2(conic.x, conic.y, conic.y, conic.z);
-    mat2 G = mat2(dl_dconic.x, 0.5 * dl_dconic.y, 0.5 * dl_dconic.y, dl_dconic.z);
-    mat2 dl_dcov2d = -(C * G * C);
-    // cov2d = J cov_view J^T (+0.3 I)
-    mat3 dl_dcov_view = transpose(J) * dl_dcov2d * J;
-    mat3x2 dl_dJ = 2.0 * dl_dcov2d * J * cov_view;
-    // J = [[fx/z, 0, -fx u_x / z], [0, fy/z, -fy u_y / z]] with u = clamp(x/z); columns of mat3x2
-    float dJ00 = dl_dJ[0][0], dJ11 = dl_dJ[1][1], dJ02 = dl_dJ[2][0], dJ12 = dl_dJ[2][1];
-    dl_dpv.z += -p.fx * rz2 * dJ00 - p.fy * rz2 * dJ11;
-    if (free_x) {
-        dl_dpv.x += -p.fx * rz2 * dJ02;
-        dl_dpv.z += 2.0 * p.fx * pv.x * rz2 * rz * dJ02;
-    } else {
-        dl_dpv.z += p.fx * cux * rz2 * dJ02;
-    }
-    if (free_y) {
-        dl_dpv.y += -p.fy * rz2 * dJ12;
-        dl_dpv.z += 2.0 * p.fy * pv.y * rz2 * rz * dJ12;
-    } else {
-        dl_dpv.z += p.fy * cuy * rz2 * dJ12;
-    }
-    dl_dm += transpose(Rv) * dl_dpv;
-
-    // cov_view = Rv cov_world Rv^T; cov_world = M M^T, M = Rq S
-    mat3 dl_dcov_world = transpose(Rv) * dl_dcov_view * Rv;
-    mat3 dl_dM = 2.0 * dl_dcov_world * M;
-    vec3 dl_ds = vec3(dot(Rq[0], dl_dM[0]), dot(Rq[1], dl_dM[1]), dot(Rq[2], dl_dM[2]));
-    mat3 dR = mat3(dl_dM[0] * s.x, dl_dM[1] * s.y, dl_dM[2] * s.z);  // columns scaled
-    // dR[col][row]: R_rc = dR[c][r]
-    float dR00 = dR[0][0], dR01 = dR[1][0], dR02 = dR[2][0];
-    float dR10 = dR[0][1], dR11 = dR[1][1], dR12 = dR[2][1];
-    float dR20 = dR[0][2], dR21 = dR[1][2], dR22 = dR[2][2];
-    vec4 dl_dq = 2.0 * vec4(
-        -z * dR01 + y * dR02 + z * dR10 - x * dR12 - y * dR20 + x * dR21,
-        y * dR01 + z * dR02 + y * dR10 - 2.0 * x * dR11 - w * dR12 + z * dR20 + w * dR21 - 2.0 * x * dR22,
-        -2.0 * y * dR00 + x * dR01 + w * dR02 + x * dR10 + z * dR12 - w * dR20 + z * dR21 - 2.0 * y * dR22,
-        -2.0 * z * dR00 - w * dR01 + x * dR02 + w * dR10 - 2.0 * z * dR11 + y * dR12 + x * dR20 + y * dR21);
-    // through the normalization q / |q|
-    dl_dq = (dl_dq - q * dot(q, dl_dq)) / q_norm;
-
     for (int i = 0; i < 3; i++) {
-        b.grad_means.v[3 * g + i] += dl_dm[i];
-        b.grad_log_scales.v[3 * g + i] += dl_ds[i] * s[i];
+        b.grad_means.v[3 * g + i] += d.mean[i];
+        b.grad_log_scales.v[3 * g + i] += d.log_scale[i];
     }
-    for (int i = 0; i < 4; i++) b.grad_quats.v[4 * g + i] += dl_dq[i];
-    b.grad_opacity_logits.v[g] += dl_dlogit;
+    for (int i = 0; i < 4; i++) b.grad_quats.v[4 * g + i] += d.quat[i];
+    b.grad_opacity_logits.v[g] += d.opacity_logit;
 }
