@@ -85,9 +85,9 @@ fn check_loss(width: usize, height: usize, masked: bool, seed: u64, run: u32) {
 
 #[test]
 fn loss_value_and_gradient_match_cpu() {
-    // one output per invocation, and runs of 8 and 16 along the blurred axis (GPU and CPU devices),
+    // one output per invocation, and runs of 8, 16 and 32 along the blurred axis (GPU and CPU devices),
     // on sizes that are no multiple of a run
-    for run in [1, 8, 16] {
+    for run in [1, 8, 16, 32] {
         check_loss(23, 19, false, 1, run);
         check_loss(30, 17, true, 2, run);
     }

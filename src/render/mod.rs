@@ -20,6 +20,9 @@ use sort::RadixSort;
 
 pub const TILE: u32 = 16;
 
+/// Consecutive intersections per invocation of tile_ranges.comp.
+const TILE_RANGE_RUN: u32 = 8;
+
 /// A scene's attributes on the GPU (structure of arrays, one buffer per attribute).
 pub struct SceneBuffers {
     pub means: Buffer,
@@ -420,7 +423,7 @@ impl Rasterizer {
             rec.dispatch(
                 &self.ranges,
                 &ParamsPushU32 { params: push.params, value: m, pad: 0 },
-                dispatch_1d(m.div_ceil(256)),
+                dispatch_1d(m.div_ceil(256 * TILE_RANGE_RUN)),
             );
             rec.mark("tile ranges");
         }
