@@ -299,5 +299,34 @@ fn fused_step_matches_the_passes_apart() {
             }
         }
     }
+
+    // Resumed at SH degree 0 from moments that cover every band (a checkpoint of a run that
+    // rendered them): the fused step must find those bands in the moments and keep stepping them.
+    let cfg = TrainConfig { iters: 100, densify: false, seed: 5, ..Default::default() };
+    let (warm, moments) = {
+        let mut t = Trainer::new(&gpu, &data, &scene, cfg.clone()).unwrap();
+        t.full_sh = true;
+        for _ in 0..2 {
+            t.iterate(&data, false).unwrap();
+        }
+        (t.download_scene().unwrap(), t.moments_host().unwrap())
+    };
+    let resumed = |fused: bool| {
+        let mut t = Trainer::new(&gpu, &data, &warm, cfg.clone()).unwrap();
+        t.load_moments(&moments).unwrap();
+        t.fused_step = fused;
+        for _ in 0..2 {
+            t.iterate(&data, false).unwrap();
+        }
+        t.download_scene().unwrap().sh
+    };
+    let (fused, apart) = (resumed(true), resumed(false));
+    let scale = apart.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+    let worst = fused.iter().zip(&apart).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+    // coefficient 1 of every Gaussian's red channel: a band above the rendered degree 0
+    let upper_moved = (0..scene.len()).map(|g| (fused[48 * g + 3] - warm.sh[48 * g + 3]).abs()).fold(0.0f32, f32::max);
+    println!("resumed: sh max |fused - apart| {worst:.3e}; band 1 moved up to {upper_moved:.2e}");
+    assert!(worst <= 2e-6 * scale, "resumed: sh differs by {worst:.3e}");
+    assert!(upper_moved > 1e-5, "resumed: the bands above degree 0 did not keep their momentum");
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }

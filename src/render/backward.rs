@@ -124,8 +124,9 @@ pub struct PixelGradients<'a> {
     pub features: Option<&'a Buffer>,
 }
 
-/// Per-view gradients of the projected quantities (zero between views: the projection backward
-/// pass clears what it consumed).
+/// Per-view gradients of the projected quantities, zeroed before each view's blend backward (a
+/// buffer fill runs at copy-engine speed; clearing them in the projection backward cost a store
+/// per float at shader speed).
 struct ViewGradients {
     capacity: u32,
     xy: Buffer,
@@ -283,6 +284,9 @@ impl Backward {
         let push = BackwardPush { render: render_params.address(), backward: self.params.address() };
         let tiles = frame.tiles_x * frame.tiles_y;
         if !features_only {
+            for (buf, per) in [(&v.xy, 2), (&v.conic, 3), (&v.opacity, 1), (&v.color, 3), (&v.depth, 1)] {
+                rec.fill(buf, 0, frame.num_gaussians as u64 * per * 4, 0);
+            }
             rec.dispatch(&self.blend, &push, dispatch_1d(tiles));
             rec.mark("blend backward");
         }

@@ -24,7 +24,7 @@ struct FusedAdamParams {
     opacity_reg: f32,
     scale_reg: f32,
     frozen: u32,
-    pad: u32,
+    sh_stepped: u32,
 }
 
 /// One parameter group's step: its moments, learning rate (and the rate of SH bands above the
@@ -39,13 +39,13 @@ pub struct GroupStep<'a> {
 /// The five groups in scene order: means, log scales, quaternions, opacity logits, SH.
 pub type Groups<'a> = [GroupStep<'a>; 5];
 
-/// Bytes moved per Gaussian with `k` SH coefficients per channel, when nothing is frozen: the
-/// parameters and both moments read and written (59 floats each at SH 3), the per-view projected
-/// gradients (10 floats) read and cleared, the densification statistics (2 words) read and
+/// Bytes moved per Gaussian when nothing is frozen and `sh_stepped` SH coefficients per channel
+/// are stepped: those parameters and both moments read and written (59 floats each at SH 3), the
+/// per-view projected gradients (10 floats) read, the densification statistics (2 words) read and
 /// written, conic and opacity (4 floats) and the tile count read.
-pub fn bytes_per_gaussian(k: u32) -> u64 {
-    let params = 3 + 3 + 4 + 1 + 3 * k as u64;
-    4 * (6 * params + 2 * 10 + 2 * 2 + 4 + 1)
+pub fn bytes_per_gaussian(sh_stepped: u32) -> u64 {
+    let params = 3 + 3 + 4 + 1 + 3 * sh_stepped as u64;
+    4 * (6 * params + 10 + 2 * 2 + 4 + 1)
 }
 
 pub struct ProjectBackwardAdam {
@@ -71,7 +71,9 @@ impl ProjectBackwardAdam {
     /// Records Adam step `step` (from 1) of every group of `scene`, with the gradients of the view
     /// whose blend backward was recorded last (`render_params` and `backward_params` are the
     /// rasterizer's and the backward's parameter blocks of that view). `regularizer` = the MCMC
-    /// (opacity, scale) weights, zero when off.
+    /// (opacity, scale) weights, zero when off. Only the first `sh_stepped` SH coefficients per
+    /// channel are stepped: the caller guarantees the others have zero moments and get no gradient
+    /// (bands not rendered yet), so a step would leave them unchanged.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
@@ -82,6 +84,7 @@ impl ProjectBackwardAdam {
         groups: &Groups,
         regularizer: (f32, f32),
         step: u32,
+        sh_stepped: u32,
     ) -> Result<()> {
         let n = scene.num_gaussians;
         let tensors = [&scene.means, &scene.log_scales, &scene.quats, &scene.opacity_logits, &scene.sh];
@@ -93,7 +96,7 @@ impl ProjectBackwardAdam {
             opacity_reg: regularizer.0 / n as f32,
             scale_reg: regularizer.1 / (3 * n) as f32,
             frozen: groups.iter().enumerate().map(|(i, g)| (g.frozen as u32) << i).sum(),
-            pad: 0,
+            sh_stepped: sh_stepped.min(crate::scene::sh_coeffs(scene.sh_degree) as u32),
         };
         self.params.write_pod(&params)?;
         let push = [render_params.address(), backward_params.address(), self.params.address()];

@@ -189,6 +189,9 @@ pub struct Trainer {
     /// gradients and running Adam per tensor; on by default, ignored for a trust-region step.
     pub fused_step: bool,
     fused: ProjectBackwardAdam,
+    /// SH coefficients per channel whose Adam moments may be nonzero: those of every band rendered
+    /// so far (the fused step leaves the rest alone, an exact no-op for them).
+    sh_stepped: u32,
     mcmc: McmcPasses,
     /// What the last MCMC relocation did.
     pub last_relocation: RelocationStats,
@@ -229,6 +232,7 @@ impl Trainer {
             trust_radius: None,
             full_sh: false,
             fused_step: true,
+            sh_stepped: 0,
             fused: ProjectBackwardAdam::new(gpu, backward.uses_cas)?,
             backward,
             mcmc: McmcPasses::new(gpu)?,
@@ -279,6 +283,7 @@ impl Trainer {
         // iteration is two submissions (the first ends at the one readback, the intersection count)
         let (frame, mut rec) = self.raster.forward_open(&self.scene, &view.camera, &settings)?;
         let outputs = self.raster.outputs().unwrap();
+        self.sh_stepped = self.sh_stepped.max(sh_coeffs(self.active_sh_degree()) as u32);
         let fused = self.fused_step && self.trust_radius.is_none();
         if !fused {
             self.grads.record_zero_parameters(&mut rec);
@@ -356,9 +361,9 @@ impl Trainer {
             group(&m.sh, LR_SH_DC, LR_SH_REST, f.sh),
         ];
         let params = self.raster.params_buffer();
-        self.fused.record(rec, params, self.backward.params(), s, &groups, regularizer, self.step)?;
-        let k = sh_coeffs(s.sh_degree) as u32;
-        rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(k));
+        let stepped = self.sh_stepped;
+        self.fused.record(rec, params, self.backward.params(), s, &groups, regularizer, self.step, stepped)?;
+        rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped));
         Ok(())
     }
 
@@ -605,6 +610,14 @@ impl Trainer {
             g.m.upload(&self.gpu, m)?;
             g.v.upload(&self.gpu, v)?;
         }
+        // the SH coefficients with any nonzero moment, per channel ([gaussian][coefficient][channel])
+        let k = sh_coeffs(self.scene.sh_degree);
+        let (m, v) = &host[4];
+        let last_nonzero = (0..k).rev().find(|&c| {
+            let touched = |x: &Vec<f32>| x.chunks(3 * k).any(|row| row[3 * c..3 * c + 3].iter().any(|&e| e != 0.0));
+            touched(m) || touched(v)
+        });
+        self.sh_stepped = last_nonzero.map_or(0, |c| c as u32 + 1);
         Ok(())
     }
 }

@@ -11,7 +11,7 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer BackwardPara
     Floats dl_dexpected_depth;
     Floats dl_dfeatures;        // feature_dim planes
     // per-view gradients of the projected quantities, accumulated by the blend backward pass and
-    // consumed (and zeroed) by the projection backward pass
+    // consumed by the projection backward pass; zeroed by the host before each view's blend backward
     GradBuf grad_xy;            // 2N
     GradBuf grad_conic;         // 3N, (a, b, c)
     GradBuf grad_opacity;       // N, of the activated opacity

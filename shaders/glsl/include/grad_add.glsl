@@ -28,11 +28,3 @@ float grad_read(GradBuf buf, uint index) {
     return buf.v[index];
 #endif
 }
-
-void grad_clear(GradBuf buf, uint index) {
-#ifdef NO_FLOAT_ATOMICS
-    buf.v[index] = 0u;
-#else
-    buf.v[index] = 0.0;
-#endif
-}

@@ -24,7 +24,8 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer FusedAdam {
     float opacity_reg;     // 3DGS-MCMC regularizer weights over N (opacity) and 3N (scales); 0 = off
     float scale_reg;
     uint frozen;           // bits: 1 means, 2 log_scales, 4 quats, 8 opacity, 16 sh (no update)
-    uint pad;
+    uint sh_stepped;       // SH coefficients per channel stepped; see main
+
 };
 
 layout(local_size_x = 256) in;
@@ -70,8 +71,10 @@ void main() {
     if ((frozen & 16u) == 0u) {
         Floats param = a.sh, m = a.m_sh, v = a.v_sh;
         AdamStep s = a.step_sh;  // lr: the DC coefficient, lr_tail: higher bands
-        uint K = p.sh_coeffs;
-        for (uint k = 0; k < K; k++) {
+        // Coefficients at and above sh_stepped belong to bands never rendered yet (the degree grows
+        // during training): zero gradient and zero moments, where an Adam step changes nothing.
+        uint K = p.sh_coeffs, stepped = a.sh_stepped;
+        for (uint k = 0; k < stepped; k++) {
             vec3 grad = k < d.bands ? d.basis[k] * d.color_raw : vec3(0.0);
             float rate = k == 0 ? s.lr : s.lr_tail;
             for (uint c = 0; c < 3; c++) step(param, m, v, (g * K + k) * 3 + c, grad[c], s, rate);

@@ -2,9 +2,9 @@
 // accumulates the result into the parameter gradients) and project_backward_adam.comp (which feeds
 // it straight to Adam): from the per-view gradients of the 2D mean, conic, activated opacity, color
 // and depth to the stored parameters (mean, log scale, quaternion, opacity logit, SH coefficients,
-// including the view-direction path of SH). Consumes (clears) the per-view gradients and updates the
-// densification statistics. The including shader enables GL_EXT_shader_atomic_float unless
-// NO_FLOAT_ATOMICS.
+// including the view-direction path of SH). Reads the per-view gradients (the host zeroes them
+// before each view's blend backward) and updates the densification statistics. The including
+// shader enables GL_EXT_shader_atomic_float unless NO_FLOAT_ATOMICS.
 #include "common.glsl"
 #include "render_params.glsl"
 #include "backward_params.glsl"
@@ -64,11 +64,6 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     float dl_dopacity = grad_read(b.grad_opacity, g);
     vec3 dl_dcolor = vec3(grad_read(b.grad_color, 3 * g), grad_read(b.grad_color, 3 * g + 1), grad_read(b.grad_color, 3 * g + 2));
     float dl_dz = grad_read(b.grad_depth, g);
-    grad_clear(b.grad_xy, 2 * g); grad_clear(b.grad_xy, 2 * g + 1);
-    grad_clear(b.grad_conic, 3 * g); grad_clear(b.grad_conic, 3 * g + 1); grad_clear(b.grad_conic, 3 * g + 2);
-    grad_clear(b.grad_opacity, g);
-    grad_clear(b.grad_color, 3 * g); grad_clear(b.grad_color, 3 * g + 1); grad_clear(b.grad_color, 3 * g + 2);
-    grad_clear(b.grad_depth, g);
 
     // densification statistic: |dL/d(mean2d)| in NDC units (pixel gradient times W/2, H/2)
     b.grad_xy_norm_sum.v[g] += length(dl_dxy * vec2(0.5 * float(p.width), 0.5 * float(p.height)));
