@@ -5,14 +5,17 @@
 //!
 //!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
 //!                                  --width 160 --height 120 --views 16 --supersample 1 --repeat-full
-//!                                  --lpips-model lpips.onnx --fid-model inception.onnx --no-readme]
+//!                                  --retrain 2 --lpips-model lpips.onnx --fid-model inception.onnx
+//!                                  --no-readme]
 //!
 //! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
 //! removal only, cogeo, ground truth on one held-out view), and replaces the table between the
 //! `removal-table` markers of README.md (unless --no-readme). `--supersample N` makes the scenes with
 //! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
 //! pipeline a second time on the same trained scene, which shows the run-to-run spread (float
-//! atomics in the GPU passes) that any difference between variants must exceed.
+//! atomics in the GPU passes) that any difference between variants must exceed. `--retrain N`
+//! trains each scene N more times with other seeds and runs the full pipeline and its closest
+//! rivals (`RETRAIN_VARIANTS`) on each: the spread across trainings, in its own table.
 
 #[path = "common.rs"]
 mod common;
@@ -47,10 +50,122 @@ const VARIANTS: [(&str, &str, &[&str]); 8] = [
     ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),
 ];
 
+/// The variants run again on every extra training of `--retrain`: the full pipeline and the
+/// strongest of the others in the table (the ablations closest to it, and the GG-style baseline).
+const RETRAIN_VARIANTS: [&str; 4] =
+    ["cogeo (full)", "harmonic fill (no texture synthesis)", "no color transfer", "nearest-copy fill (GG-style)"];
+
 fn num(v: &Value, digits: usize) -> String {
     match v.as_f64() {
         Some(x) if x.is_finite() => format!("{x:.digits$}"),
         _ => "n/a".into(),
+    }
+}
+
+/// One scene's dataset and how to train, tag, remove and score on it.
+struct Training<'a> {
+    spec: &'a SceneSpec,
+    data: &'a Path,
+    truth: &'a Path,
+    iters: &'a str,
+    lpips: &'a Option<String>,
+    fid: &'a Option<String>,
+}
+
+impl Training<'_> {
+    /// Trains the scene with `seed` into `dir`, tags it, runs each variant and scores it: one row per
+    /// variant, with the device and the training's seed and test PSNR.
+    fn variants(&self, dir: &Path, seed: u64, variants: &[(&str, &str, &[&str])]) -> Vec<Value> {
+        let p = |x: &Path| x.to_string_lossy().into_owned();
+        let (spec, data) = (self.spec, self.data);
+        let train = dir.join("train");
+        cogeo(&s(&[
+            "train",
+            "--data",
+            &p(data),
+            "--out",
+            &p(&train),
+            "--iters",
+            self.iters,
+            "--sh-degree",
+            "1",
+            "--no-densify",
+            "--checkpoint-every",
+            "0",
+            "--seed",
+            &seed.to_string(),
+        ]));
+        let train_metrics = read_json(&train.join("metrics.json"));
+        let mut methods: Vec<&str> = variants.iter().map(|v| v.1).collect();
+        methods.sort();
+        methods.dedup();
+        for method in methods {
+            cogeo(&s(&[
+                "tag",
+                "--scene",
+                &p(&train.join("scene.ply")),
+                "--data",
+                &p(data),
+                "--masks",
+                "object_mask",
+                "--method",
+                method,
+                "--out",
+                &p(&dir.join(format!("tagged_{method}.ply"))),
+            ]));
+        }
+        let mut rows = Vec::new();
+        for (k, (variant, method, extra)) in variants.iter().enumerate() {
+            let out = dir.join(format!("variant_{k}"));
+            let mut a = s(&[
+                "remove",
+                "--scene",
+                &p(&dir.join(format!("tagged_{method}.ply"))),
+                "--data",
+                &p(data),
+                "--labels",
+                spec.labels,
+                "--out",
+                &p(&out),
+            ]);
+            a.extend(s(extra));
+            cogeo(&a);
+            let metrics_path = out.join("metrics.json");
+            let mut e = s(&[
+                "eval",
+                "--renders",
+                &p(&out.join("test_after")),
+                "--gt",
+                &p(self.truth),
+                "--masks",
+                &p(&data.join("object_mask")),
+                "--labels",
+                spec.labels,
+                "--data",
+                &p(data),
+                "--scene",
+                &p(&out.join("scene.ply")),
+                "--out",
+                &p(&metrics_path),
+            ]);
+            if let Some(m) = self.lpips {
+                e.extend(s(&["--lpips-model", m]));
+            }
+            if let Some(m) = self.fid {
+                e.extend(s(&["--fid-model", m]));
+            }
+            cogeo(&e);
+            let report = read_json(&out.join("report.json"));
+            let m = read_json(&metrics_path);
+            rows.push(json!({
+                "scene": spec.name, "removed_labels": spec.labels, "variant": variant, "training_seed": seed,
+                "device": report["device"], "train_test_psnr": train_metrics["test"]["psnr"],
+                "metrics": m, "stage_seconds": report["seconds"], "total_seconds": report["total_seconds"],
+                "peak_rss_mib": report["peak_rss_mib"], "gaussians": report["gaussians"],
+                "background_psnr_vs_original": report["background_psnr_vs_original"]["mean"],
+            }));
+        }
+        rows
     }
 }
 
@@ -63,6 +178,7 @@ fn main() {
         (arg("--iters", "500"), arg("--width", "160"), arg("--height", "120"), arg("--views", "16"));
     let supersample = arg("--supersample", "1");
     let repeat_full = args.iter().any(|a| a == "--repeat-full");
+    let retrain: u64 = arg("--retrain", "0").parse().expect("--retrain takes a count");
     let mut variants: Vec<(&str, &str, &[&str])> = VARIANTS.to_vec();
     if repeat_full {
         variants.insert(1, ("cogeo (full, second run)", "vote", &[]));
@@ -79,6 +195,7 @@ fn main() {
     let root = std::env::temp_dir().join(format!("cogeo_bench_removal_{}", std::process::id()));
     let p = |x: &Path| x.to_string_lossy().into_owned();
     let mut rows = Vec::new();
+    let mut retrained = Vec::new();
     let mut device = String::new();
     let mut example: Option<(PathBuf, PathBuf, PathBuf, PathBuf, &str)> = None;
     for spec in SCENES.iter().filter(|s| wanted.iter().any(|w| w == s.name)) {
@@ -107,89 +224,16 @@ fn main() {
         let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
         let truth = cogeo::synth::ground_truth(&data, &labels);
         assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);
-        let train = dir.join("train");
-        cogeo(&s(&[
-            "train",
-            "--data",
-            &p(&data),
-            "--out",
-            &p(&train),
-            "--iters",
-            &iters,
-            "--sh-degree",
-            "1",
-            "--no-densify",
-            "--checkpoint-every",
-            "0",
-            "--seed",
-            &spec.seed.to_string(),
-        ]));
-        let train_metrics = read_json(&train.join("metrics.json"));
-        for method in ["vote", "project"] {
-            cogeo(&s(&[
-                "tag",
-                "--scene",
-                &p(&train.join("scene.ply")),
-                "--data",
-                &p(&data),
-                "--masks",
-                "object_mask",
-                "--method",
-                method,
-                "--out",
-                &p(&dir.join(format!("tagged_{method}.ply"))),
-            ]));
+        let run = Training { spec, data: &data, truth: &truth.images, iters: &iters, lpips: &lpips, fid: &fid };
+        for r in run.variants(&dir, spec.seed, &variants) {
+            device = r["device"].as_str().unwrap_or("?").to_string();
+            rows.push(r);
         }
-        for (k, (variant, method, extra)) in variants.iter().enumerate() {
-            let out = dir.join(format!("variant_{k}"));
-            let mut a = s(&[
-                "remove",
-                "--scene",
-                &p(&dir.join(format!("tagged_{method}.ply"))),
-                "--data",
-                &p(&data),
-                "--labels",
-                spec.labels,
-                "--out",
-                &p(&out),
-            ]);
-            a.extend(s(&extra[..]));
-            cogeo(&a);
-            let metrics_path = out.join("metrics.json");
-            let mut e = s(&[
-                "eval",
-                "--renders",
-                &p(&out.join("test_after")),
-                "--gt",
-                &p(&truth.images),
-                "--masks",
-                &p(&data.join("object_mask")),
-                "--labels",
-                spec.labels,
-                "--data",
-                &p(&data),
-                "--scene",
-                &p(&out.join("scene.ply")),
-                "--out",
-                &p(&metrics_path),
-            ]);
-            if let Some(m) = &lpips {
-                e.extend(s(&["--lpips-model", m]));
-            }
-            if let Some(m) = &fid {
-                e.extend(s(&["--fid-model", m]));
-            }
-            cogeo(&e);
-            let report = read_json(&out.join("report.json"));
-            device = report["device"].as_str().unwrap_or("?").to_string();
-            let m = read_json(&metrics_path);
-            rows.push(json!({
-                "scene": spec.name, "removed_labels": spec.labels, "variant": variant,
-                "train_test_psnr": train_metrics["test"]["psnr"],
-                "metrics": m, "stage_seconds": report["seconds"], "total_seconds": report["total_seconds"],
-                "peak_rss_mib": report["peak_rss_mib"], "gaussians": report["gaussians"],
-                "background_psnr_vs_original": report["background_psnr_vs_original"]["mean"],
-            }));
+        for i in 1..=retrain {
+            let seed = spec.seed + 1000 * i;
+            eprintln!("scene {}: extra training {i} of {retrain} (seed {seed})", spec.name);
+            let chosen: Vec<_> = variants.iter().filter(|v| RETRAIN_VARIANTS.contains(&v.0)).cloned().collect();
+            retrained.extend(run.variants(&dir.join(format!("retrain_{i}")), seed, &chosen));
         }
         // variant 0 is the full pipeline
         let only = variants.iter().position(|v| v.0 == "removal only").unwrap();
@@ -277,6 +321,41 @@ fn main() {
             num(&t["render"], 2)
         );
     }
+    if retrain > 0 {
+        md += &format!(
+            "\nSpread across trainings (`--retrain {retrain}`): each scene trained {} times (seeds s, s + 1000, ...), \
+             the full pipeline and its closest rivals run on each; min / median / max over the trainings:\n\n\
+             | scene | variant | masked PSNR | masked LPIPS | never-seen PSNR | never-seen LPIPS |\n|---|---|---|---|---|---|\n",
+            retrain + 1
+        );
+        for spec in SCENES.iter().filter(|s| wanted.iter().any(|w| w == s.name)) {
+            for variant in RETRAIN_VARIANTS {
+                let sel: Vec<&Value> = rows
+                    .iter()
+                    .chain(&retrained)
+                    .filter(|r| r["scene"] == spec.name && r["variant"] == variant)
+                    .map(|r| &r["metrics"])
+                    .collect();
+                let spread = |f: &dyn Fn(&Value) -> Option<f64>, digits: usize| {
+                    let mut v: Vec<f64> = sel.iter().filter_map(|m| f(m)).collect();
+                    if v.is_empty() {
+                        return "n/a".to_string();
+                    }
+                    v.sort_by(f64::total_cmp);
+                    let at = |x: f64| num(&json!(x), digits);
+                    format!("{} / {} / {}", at(v[0]), at(v[v.len() / 2]), at(v[v.len() - 1]))
+                };
+                md += &format!(
+                    "| {} | {variant} | {} | {} | {} | {} |\n",
+                    spec.name,
+                    spread(&|m| m["mask"]["psnr"].as_f64(), 2),
+                    spread(&|m| m["lpips"]["mask"].as_f64(), 3),
+                    spread(&|m| m["never_seen"]["psnr"].as_f64(), 2),
+                    spread(&|m| m["lpips"]["never_seen"].as_f64(), 3),
+                );
+            }
+        }
+    }
     println!("{md}");
     let slug: String = device
         .to_lowercase()
@@ -288,7 +367,7 @@ fn main() {
         + &if supersample == "1" { String::new() } else { format!("-aa{supersample}") };
     common::write_json(
         &common::results_path(&format!("removal-{slug}.json")),
-        &json!({ "device": device, "supersample": supersample, "rows": rows }),
+        &json!({ "device": device, "supersample": supersample, "rows": rows, "retrained": retrained }),
     );
     let md_path = common::results_path(&format!("removal-{slug}.md"));
     std::fs::write(&md_path, &md).unwrap();
