@@ -73,7 +73,8 @@ impl ProjectBackwardAdam {
     /// rasterizer's and the backward's parameter blocks of that view). `regularizer` = the MCMC
     /// (opacity, scale) weights, zero when off. Only the first `sh_stepped` SH coefficients per
     /// channel are stepped: the caller guarantees the others have zero moments and get no gradient
-    /// (bands not rendered yet), so a step would leave them unchanged.
+    /// (bands not rendered yet), so a step would leave them unchanged. The constants go to one
+    /// host-visible block: one recording per submission.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,

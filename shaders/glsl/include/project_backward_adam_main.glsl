@@ -1,7 +1,7 @@
 // Projection backward fused with Adam, one thread per Gaussian: the parameter gradients of the
 // view just blended (project_backward_grads.glsl) go straight into the Adam step of every element
 // of the Gaussian. A training step of one view thereby never writes, zeroes or reads back the
-// parameter gradient tensors: at 1M SH-3 Gaussians that is 0.9 GB of the 2.5 GB the two passes
+// parameter gradient tensors: at 1M SH-3 Gaussians that is 1.0 GB of the 2.5 GB the two passes
 // moved apart (train/fused.rs). Same arithmetic as project_backward.comp + mcmc_regularize.comp +
 // adam.comp on zeroed gradients; a Gaussian the view culled gets a zero gradient and still steps.
 #ifndef NO_FLOAT_ATOMICS
@@ -25,13 +25,12 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer FusedAdam {
     float scale_reg;
     uint frozen;           // bits: 1 means, 2 log_scales, 4 quats, 8 opacity, 16 sh (no update)
     uint sh_stepped;       // SH coefficients per channel stepped; see main
-
 };
 
 layout(local_size_x = 256) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; FusedAdam a; };
 
-void step(Floats param, Floats m, Floats v, uint i, float g, AdamStep s, float rate) {
+void step_element(Floats param, Floats m, Floats v, uint i, float g, AdamStep s, float rate) {
     param.v[i] -= adam_update_value(g, m, v, i, s, rate);
 }
 
@@ -46,7 +45,7 @@ void main() {
     if ((frozen & 1u) == 0u) {
         Floats param = a.means, m = a.m_means, v = a.v_means;
         AdamStep s = a.step_means;
-        for (uint i = 0; i < 3; i++) step(param, m, v, 3 * g + i, d.mean[i], s, s.lr);
+        for (uint i = 0; i < 3; i++) step_element(param, m, v, 3 * g + i, d.mean[i], s, s.lr);
     }
     if ((frozen & 2u) == 0u) {
         Floats param = a.log_scales, m = a.m_log_scales, v = a.v_log_scales;
@@ -54,19 +53,19 @@ void main() {
         float weight = a.scale_reg;
         for (uint i = 0; i < 3; i++) {
             uint e = 3 * g + i;
-            step(param, m, v, e, d.log_scale[i] + weight * exp(param.v[e]), s, s.lr);
+            step_element(param, m, v, e, d.log_scale[i] + weight * exp(param.v[e]), s, s.lr);
         }
     }
     if ((frozen & 4u) == 0u) {
         Floats param = a.quats, m = a.m_quats, v = a.v_quats;
         AdamStep s = a.step_quats;
-        for (uint i = 0; i < 4; i++) step(param, m, v, 4 * g + i, d.quat[i], s, s.lr);
+        for (uint i = 0; i < 4; i++) step_element(param, m, v, 4 * g + i, d.quat[i], s, s.lr);
     }
     if ((frozen & 8u) == 0u) {
         Floats param = a.opacity_logits;
         float sig = 1.0 / (1.0 + exp(-param.v[g]));
         float reg = a.opacity_reg * sig * (1.0 - sig);
-        step(param, a.m_opacity, a.v_opacity, g, d.opacity_logit + reg, a.step_opacity, a.step_opacity.lr);
+        step_element(param, a.m_opacity, a.v_opacity, g, d.opacity_logit + reg, a.step_opacity, a.step_opacity.lr);
     }
     if ((frozen & 16u) == 0u) {
         Floats param = a.sh, m = a.m_sh, v = a.v_sh;
@@ -77,7 +76,7 @@ void main() {
         for (uint k = 0; k < stepped; k++) {
             vec3 grad = k < d.bands ? d.basis[k] * d.color_raw : vec3(0.0);
             float rate = k == 0 ? s.lr : s.lr_tail;
-            for (uint c = 0; c < 3; c++) step(param, m, v, (g * K + k) * 3 + c, grad[c], s, rate);
+            for (uint c = 0; c < 3; c++) step_element(param, m, v, (g * K + k) * 3 + c, grad[c], s, rate);
         }
     }
 }
