@@ -345,3 +345,73 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
     let t = transfer(0, &target_cam, &off, &fill, &sources, 0.05);
     assert!(t.found.iter().all(|&f| !f));
 }
+
+#[test]
+fn photo_consistent_depth_undoes_a_biased_hole_depth() {
+    use cogeo::removal::complete::photo_depth::correct_hole_depth;
+    use cogeo::removal::complete::transfer::SourceView;
+    use cogeo::scene::Camera;
+    // a textured wall at z = 5 seen by a target and three sources 1.5 to the side, above, below
+    let (w, h) = (96usize, 72usize);
+    let cam = |name: &str, x: f64, y: f64| {
+        Camera::look_at(name, w as u32, h as u32, 60.0, [x, y, 0.0], [x, y, 5.0], [0.0, -1.0, 0.0])
+    };
+    let cams = [cam("t", 0.0, 0.0), cam("a", 1.5, 0.0), cam("b", -1.5, 0.5), cam("c", 0.3, -1.5)];
+    let tau = std::f64::consts::TAU;
+    let color = |p: [f64; 3]| {
+        let s = (tau * p[0] / 0.36).sin() * (tau * p[1] / 0.5).cos();
+        [0.5 + 0.3 * s, 0.5 - 0.2 * (tau * (p[0] + p[1]) / 0.7).sin(), 0.4 + 0.1 * s]
+    };
+    let photos: Vec<Vec<f32>> = cams
+        .iter()
+        .map(|c| {
+            let mut photo = vec![0f32; 3 * w * h];
+            for p in 0..w * h {
+                let (u, v) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
+                // the camera looks along +z: the wall point under a pixel, in the world
+                let (x, y) = ((u - c.cx) / c.fx * 5.0, (v - c.cy) / c.fy * 5.0);
+                let ctr = c.center();
+                let r = c.rotation;
+                let pt = [0, 1, 2].map(|k| ctr[k] + r[0][k] * x + r[1][k] * y + r[2][k] * 5.0);
+                assert!((pt[2] - 5.0).abs() < 1e-9);
+                let rgb = color(pt);
+                for k in 0..3 {
+                    photo[k * w * h + p] = rgb[k] as f32;
+                }
+            }
+            photo
+        })
+        .collect();
+    let no_hole = vec![false; w * h];
+    let (depth, alpha) = (vec![5.0f32; w * h], vec![1.0f32; w * h]);
+    let sources: Vec<SourceView> = cams
+        .iter()
+        .zip(&photos)
+        .map(|(camera, photo)| SourceView { camera, photo, hole: &no_hole, depth: &depth, alpha: &alpha })
+        .collect();
+    // two holes whose completed depth is 2 % too near and 1 % too far
+    let in_a = |p: usize| (16..40).contains(&(p % w)) && (18..42).contains(&(p / w));
+    let in_b = |p: usize| (56..80).contains(&(p % w)) && (28..52).contains(&(p / w));
+    let hole: Vec<bool> = (0..w * h).map(|p| in_a(p) || in_b(p)).collect();
+    let mut completed: Vec<f32> = (0..w * h)
+        .map(|p| {
+            if in_a(p) {
+                4.9
+            } else if in_b(p) {
+                5.05
+            } else {
+                5.0
+            }
+        })
+        .collect();
+    let report = correct_hole_depth(0, &cams[0], &mut completed, &hole, &sources, 0.05);
+    // of the 1152 hole pixels, those inside the images of at least two sources
+    assert!(report.pixels > 1000, "{report:?}");
+    assert!(report.cost_after < 0.05 * report.cost_before, "{report:?}");
+    let mut errors: Vec<f64> =
+        (0..w * h).filter(|&p| hole[p]).map(|p| (completed[p] as f64 / 5.0 - 1.0).abs()).collect();
+    errors.sort_by(f64::total_cmp);
+    let (median, worst) = (errors[errors.len() / 2], errors[errors.len() - 1]);
+    assert!(median < 5e-4 && worst < 2e-3, "relative depth error median {median}, worst {worst}");
+    assert!((0..w * h).filter(|&p| !hole[p]).all(|p| completed[p] == 5.0), "pixels off the hole keep their depth");
+}

@@ -56,6 +56,12 @@ pub struct RemovalFlags {
     /// the built-in inpainter fills without the background planes.
     #[arg(long)]
     pub no_depth_guidance: bool,
+    /// Keep each hole's completed depth as it is before the color transfer (ablation). By default
+    /// it is corrected by photo-consistency: where two or more other views saw the hole's
+    /// surface, the depth at which their photos agree on its color (one factor per hole, then
+    /// per pixel within 3 % of it).
+    #[arg(long)]
+    pub no_photo_depth: bool,
     /// Ablation: no depth-guided color transfer (hole pixels that other views saw keep their render
     /// or are inpainted like the rest instead of taking those views' captured colors).
     #[arg(long)]
@@ -76,6 +82,11 @@ pub struct RemovalFlags {
     /// Refinement iterations (the first half with geometry frozen).
     #[arg(long, default_value_t = 150)]
     pub refine_iters: u32,
+    /// Refinement learning rate of the colors (SH coefficients) as a multiple of training's. Adam
+    /// moves a coefficient by about its rate per step, so at training's rate the short refinement
+    /// cannot recolor the Gaussians left behind the objects.
+    #[arg(long, default_value_t = cogeo::removal::refine::COLOR_LR_GAIN)]
+    pub refine_color_lr_gain: f32,
     /// Trust region: per-step update norm bound of each geometry tensor in the second half.
     #[arg(long, default_value_t = 0.01)]
     pub trust_radius: f32,
@@ -209,6 +220,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         refine_sweeps: f.depth_sweeps,
         diffusion_steps: f.diffusion_steps,
         depth_guidance: !f.no_depth_guidance,
+        photo_depth: !f.no_photo_depth,
         seed: f.seed,
     };
     let opts = cogeo::removal::RemoveOptions {
@@ -240,6 +252,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
             trust_radius: f.trust_radius,
             background: f.background,
             seed: f.seed,
+            color_lr_gain: f.refine_color_lr_gain,
             ..Default::default()
         },
         background: f.background,

@@ -180,8 +180,9 @@ pub fn remove(
             let holes: Vec<&[bool]> = masked.iter().map(|m| m.hole.as_slice()).collect();
             let fills: Vec<&[bool]> = masked.iter().map(|m| m.fill.as_slice()).collect();
             let moved = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
-            for (r, n) in per_view.iter_mut().zip(moved) {
+            for (r, (n, scale)) in per_view.iter_mut().zip(moved) {
                 r["transferred_pixels"] = n.into();
+                r["hole_depth_scale"] = serde_json::to_value(scale)?;
             }
             clock.lap("transfer");
         }
@@ -365,6 +366,7 @@ fn completer_summary(c: &Completer, stages: &Stages) -> serde_json::Value {
     serde_json::json!({
         "inpainter": c.inpainter.name(),
         "depth_guidance": c.depth_guidance,
+        "photo_consistent_hole_depth": c.photo_depth && stages.transfer,
         "depth_prior": c.prior.name(),
         "depth_refiner": c.refiner.as_ref().map(|r| r.path().display().to_string()).unwrap_or_else(|| format!("built-in edge-aware ({} sweeps)", c.refine_sweeps)),
     })

@@ -40,6 +40,15 @@ pub struct TrainConfig {
     pub strategy: Strategy,
     pub seed: u64,
     pub background: [f32; 3],
+    /// Multiplies the SH learning rates (1: INRIA's). The removal's short refinement raises it:
+    /// Adam moves a coefficient by about its learning rate per step, so the INRIA rate needs
+    /// hundreds of steps to recolor a Gaussian.
+    #[serde(default = "unit_gain")]
+    pub color_lr_gain: f32,
+}
+
+fn unit_gain() -> f32 {
+    1.0
 }
 
 impl Default for TrainConfig {
@@ -57,6 +66,7 @@ impl Default for TrainConfig {
             strategy: Strategy::Adc,
             seed: 0,
             background: [0.0; 3],
+            color_lr_gain: 1.0,
         }
     }
 }
@@ -359,7 +369,7 @@ impl Trainer {
             group(&m.log_scales, LR_SCALE, LR_SCALE, f.log_scales),
             group(&m.quats, LR_ROTATION, LR_ROTATION, f.quats),
             group(&m.opacity_logits, LR_OPACITY, LR_OPACITY, f.opacity),
-            group(&m.sh, LR_SH_DC, LR_SH_REST, f.sh),
+            group(&m.sh, self.cfg.color_lr_gain * LR_SH_DC, self.cfg.color_lr_gain * LR_SH_REST, f.sh),
         ];
         let params = self.raster.params_buffer();
         let stepped = self.sh_stepped;
@@ -406,7 +416,8 @@ impl Trainer {
             self.adam.record(rec, &s.opacity_logits, &g.opacity_logits, &m.opacity_logits, LR_OPACITY, self.step);
         }
         if !f.sh {
-            self.adam.record_split(rec, &s.sh, &g.sh, &m.sh, (LR_SH_DC, 3 * k, 3, LR_SH_REST), self.step);
+            let gain = self.cfg.color_lr_gain;
+            self.adam.record_split(rec, &s.sh, &g.sh, &m.sh, (gain * LR_SH_DC, 3 * k, 3, gain * LR_SH_REST), self.step);
         }
         rec.mark_moved("adam", adam_bytes);
         Ok(())

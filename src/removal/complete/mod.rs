@@ -14,6 +14,7 @@
 //!   surface's colors on it.
 //! - `rectify`: a plane's pixels on a regular grid in the plane, where the exemplar copies
 //!   texture with its period under perspective.
+//! - `photo_depth`: the hole depth's scale that makes the other views agree on its colors.
 //! - `transfer`: colors of the completed surface from the other views that saw it.
 
 pub mod depth;
@@ -21,6 +22,7 @@ pub mod diffusion;
 pub mod exemplar;
 pub mod harmonic;
 pub mod inpaint;
+pub mod photo_depth;
 pub mod rectify;
 pub mod surfaces;
 pub mod transfer;
@@ -30,9 +32,14 @@ use anyhow::Result;
 use depth::{DepthPrior, DepthView, PriorSpace};
 use diffusion::OnnxDenoiser;
 use inpaint::Inpainter;
+use photo_depth::{correct_hole_depth, DepthScale};
 use rectify::Intrinsics;
 use surfaces::Plane;
 use transfer::{transfer, SourceView, Transfer};
+
+/// How far (relative) a view's original depth may be from a transferred point's for that view to
+/// lend its color.
+const TRANSFER_TOLERANCE: f64 = 0.05;
 
 /// The models and settings of completion.
 pub struct Completer {
@@ -48,6 +55,9 @@ pub struct Completer {
     /// Use the depth prior at all (`false`: the ablation without depth guidance, which takes the
     /// depth rendered after removal as it is).
     pub depth_guidance: bool,
+    /// Correct each hole's depth by photo-consistency across the views before the color
+    /// transfer (`photo_depth`; `false`: the ablation).
+    pub photo_depth: bool,
     pub seed: u64,
 }
 
@@ -105,7 +115,8 @@ impl Completer {
     /// render background that few views constrained): pixels whose completed surface point another
     /// view saw take that view's captured color (`sources`, one per view), and what no view saw
     /// of `fill` is inpainted again, now from the transferred colors too. Returns the number of
-    /// transferred pixels per view.
+    /// transferred pixels per view and the factor each view's hole depth was corrected by first
+    /// (`photo_depth`).
     pub fn transfer_colors(
         &mut self,
         cameras: &[Camera],
@@ -113,9 +124,20 @@ impl Completer {
         holes: &[&[bool]],
         fills: &[&[bool]],
         completed: &mut [Completed],
-    ) -> Result<Vec<usize>> {
+    ) -> Result<Vec<(usize, DepthScale)>> {
+        // every correction from the depths as completed (the sources hold the original renders)
+        let scales: Vec<DepthScale> = completed
+            .iter_mut()
+            .enumerate()
+            .map(|(i, c)| {
+                if !self.photo_depth {
+                    return DepthScale::unchanged();
+                }
+                correct_hole_depth(i, &cameras[i], &mut c.depth, holes[i], sources, TRANSFER_TOLERANCE)
+            })
+            .collect();
         let found: Vec<Transfer> = (0..completed.len())
-            .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, 0.05))
+            .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE))
             .collect();
         let mut counts = Vec::with_capacity(found.len());
         for (i, t) in found.into_iter().enumerate() {
@@ -136,7 +158,7 @@ impl Completer {
                 let k = Intrinsics::from(&cameras[i]);
                 c.rgb = self.inpaint_again(i, &image, &rest, &avoid, (&c.surfaces, &c.planes, &k), w, h)?;
             }
-            counts.push(n);
+            counts.push((n, scales[i]));
         }
         Ok(counts)
     }

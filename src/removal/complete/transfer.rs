@@ -5,6 +5,7 @@
 //! puts the point where the other view really saw it, so this is where depth guidance pays off in
 //! color, not just in geometry.
 
+use super::photo_depth::{back_project, sees};
 use crate::image_ops::sample_bilinear;
 use crate::scene::Camera;
 
@@ -49,30 +50,12 @@ pub fn transfer(
         (0..3).map(|k| (c[k] - center[k]).powi(2)).sum::<f64>()
     };
     order.sort_by(|&a, &b| dist(a).total_cmp(&dist(b)));
-    // camera-to-world: x_w = R^T (x_c - t)
-    let r = camera.rotation;
-    let t = camera.translation;
     for p in (0..w * h).filter(|&p| fill[p] && depth[p] > 0.0 && depth[p].is_finite()) {
-        let z = depth[p] as f64;
-        let (u, v) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
-        let xc = [(u - camera.cx) / camera.fx * z - t[0], (v - camera.cy) / camera.fy * z - t[1], z - t[2]];
-        let world = [0, 1, 2].map(|k| r[0][k] * xc[0] + r[1][k] * xc[1] + r[2][k] * xc[2]);
+        let world = back_project(camera, p, depth[p] as f64);
         for &j in &order {
             let s = &sources[j];
+            let Some((x, y)) = sees(s, world, tolerance) else { continue };
             let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
-            let pc = s.camera.to_camera(world);
-            if pc[2] <= 1e-6 {
-                continue;
-            }
-            let x = s.camera.fx * pc[0] / pc[2] + s.camera.cx;
-            let y = s.camera.fy * pc[1] / pc[2] + s.camera.cy;
-            if x < 0.0 || y < 0.0 || x >= sw as f64 || y >= sh as f64 {
-                continue;
-            }
-            let q = y as usize * sw + x as usize;
-            if s.hole[q] || s.alpha[q] <= 0.5 || (pc[2] - s.depth[q] as f64).abs() > tolerance * s.depth[q] as f64 {
-                continue;
-            }
             for c in 0..3 {
                 out.rgb[c * w * h + p] = sample_bilinear(s.photo, sw, sh, c, x, y);
             }
