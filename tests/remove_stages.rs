@@ -414,4 +414,10 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     let (median, worst) = (errors[errors.len() / 2], errors[errors.len() - 1]);
     assert!(median < 5e-4 && worst < 2e-3, "relative depth error median {median}, worst {worst}");
     assert!((0..w * h).filter(|&p| !hole[p]).all(|p| completed[p] == 5.0), "pixels off the hole keep their depth");
+    // 8 % too near is beyond the 5 % searched: the least cost lies at the end of the range, which
+    // is no minimum, and the depth stays as it was
+    let mut far_off: Vec<f32> = (0..w * h).map(|p| if hole[p] { 4.6 } else { 5.0 }).collect();
+    let report = correct_hole_depth(0, &cams[0], &mut far_off, &hole, &sources, 0.2);
+    assert!(report.pixels > 1000 && report.scale == 1.0, "{report:?}");
+    assert!((0..w * h).all(|p| far_off[p] == if hole[p] { 4.6 } else { 5.0 }));
 }

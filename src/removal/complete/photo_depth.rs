@@ -182,6 +182,11 @@ pub fn correct_hole_depth(
     let costs: Vec<f64> = scales.iter().map(|&s| seen.mean_variance(s)).collect();
     let cost_before = costs[SCALE_STEPS as usize];
     let Some(global) = parabola_minimum(&scales, &costs) else { return unchanged };
+    // a minimum at the end of the range is no minimum: the cost still falls outside it (on the
+    // statue's grass, towards where the views sample a smoother, farther texture)
+    if (global - 1.0).abs() >= SCALE_RANGE * (1.0 - 0.5 / SCALE_STEPS as f64) {
+        return DepthScale { cost_before, cost_after: cost_before, ..unchanged };
+    }
     // NaN or no better: leave the depth
     if seen.mean_variance(global).partial_cmp(&cost_before) != Some(std::cmp::Ordering::Less) {
         return DepthScale { cost_before, cost_after: cost_before, ..unchanged };
