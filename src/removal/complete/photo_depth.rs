@@ -2,7 +2,7 @@
 //! the planes around it, and both sit in front of the true surface: a blended depth weights the
 //! front of a surface's Gaussians most, and the Gaussians left behind a removed object were
 //! constrained by few views. On the bench scenes the hole's depth was 1.7-2.3 % too near (median;
-//! 90 % of its pixels more than 1.3 %), which shifts a transferred texel by a pixel or two in the
+//! 90 % of its pixels more than 1.4 %), which shifts a transferred texel by a pixel or two in the
 //! other views: the transfer then copies the checkerboard out of phase, and the patch Gaussians
 //! land off the surface.
 //!
@@ -77,8 +77,8 @@ pub fn project(s: &SourceView, world: [f64; 3]) -> Option<(f64, f64, usize, f64)
     Some((x, y, y as usize * sw + x as usize, pc[2]))
 }
 
-/// True when source `s` saw `world` as the transfer asks: off its hole, where its original
-/// render is opaque and at the point's depth within `tolerance` (relative).
+/// Where source `s` saw `world`, as the transfer asks (off its hole, where its original render
+/// is opaque and at the point's depth within `tolerance`, relative): the image position, or None.
 pub fn sees(s: &SourceView, world: [f64; 3], tolerance: f64) -> Option<(f64, f64)> {
     let (x, y, q, z) = project(s, world)?;
     let d = s.depth[q] as f64;
