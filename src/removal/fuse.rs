@@ -133,16 +133,8 @@ pub struct FuseStats {
 
 /// Where `p` lands in `o`: (pixel index, camera z), or None outside its image or behind it.
 fn land(o: &FuseView, p: [f64; 3]) -> Option<(usize, f64)> {
-    let pc = o.camera.to_camera(p);
-    if pc[2] <= 1e-6 {
-        return None;
-    }
-    let u = o.camera.fx * pc[0] / pc[2] + o.camera.cx;
-    let t = o.camera.fy * pc[1] / pc[2] + o.camera.cy;
-    if u < 0.0 || t < 0.0 || u >= o.camera.width as f64 || t >= o.camera.height as f64 {
-        return None;
-    }
-    Some((t as usize * o.camera.width as usize + u as usize, pc[2]))
+    let (x, y, z) = o.camera.project_to_image(p)?;
+    Some((y as usize * o.camera.width as usize + x as usize, z))
 }
 
 /// Views by fill size, largest first (ties by index).
@@ -155,18 +147,6 @@ fn owner_order(views: &[FuseView]) -> Vec<usize> {
 /// Does `o` complete the surface point `p`: it lands in o's fill within `tolerance` of o's depth?
 fn same_surface(o: &FuseView, p: [f64; 3], tolerance: f32) -> bool {
     land(o, p).is_some_and(|(q, z)| o.fill[q] && (z - o.depth[q] as f64).abs() <= o.depth[q] as f64 * tolerance as f64)
-}
-
-fn back_project(cam: &Camera, x: usize, y: usize, z: f64) -> [f64; 3] {
-    let pc = [(x as f64 + 0.5 - cam.cx) / cam.fx * z, (y as f64 + 0.5 - cam.cy) / cam.fy * z, z];
-    let d = [pc[0] - cam.translation[0], pc[1] - cam.translation[1], pc[2] - cam.translation[2]];
-    let r = cam.rotation;
-    // world = R^T (camera - t)
-    [
-        r[0][0] * d[0] + r[1][0] * d[1] + r[2][0] * d[2],
-        r[0][1] * d[0] + r[1][1] * d[1] + r[2][1] * d[2],
-        r[0][2] * d[0] + r[1][2] * d[1] + r[2][2] * d[2],
-    ]
 }
 
 /// Back-projects, checks consistency across views and merges.
@@ -187,7 +167,7 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
                     continue;
                 }
                 stats.sampled += 1;
-                let p = back_project(v.camera, x, y, z);
+                let p = v.camera.pixel_point(x, y, z);
                 let floats = views.iter().enumerate().any(|(vj, o)| {
                     vj != vi
                         && land(o, p)
@@ -373,7 +353,7 @@ mod tests {
     #[test]
     fn back_projection_inverts_projection() {
         let cam = Camera::look_at("c", 64, 48, 50.0, [1.0, -3.0, 1.5], [0.0, 0.0, 0.3], [0.0, 0.0, 1.0]);
-        let p = back_project(&cam, 10, 30, 2.5);
+        let p = cam.pixel_point(10, 30, 2.5);
         let pc = cam.to_camera(p);
         assert!((pc[2] - 2.5).abs() < 1e-9);
         assert!((cam.fx * pc[0] / pc[2] + cam.cx - 10.5).abs() < 1e-9);

@@ -79,6 +79,30 @@ impl Camera {
         ]
     }
 
+    /// World point of pixel (x, y)'s center at view depth `z`: x_w = R^T (x_c - t).
+    pub fn pixel_point(&self, x: usize, y: usize, z: f64) -> [f64; 3] {
+        let pc = [(x as f64 + 0.5 - self.cx) / self.fx * z, (y as f64 + 0.5 - self.cy) / self.fy * z, z];
+        let d = [pc[0] - self.translation[0], pc[1] - self.translation[1], pc[2] - self.translation[2]];
+        let r = &self.rotation;
+        [
+            r[0][0] * d[0] + r[1][0] * d[1] + r[2][0] * d[2],
+            r[0][1] * d[0] + r[1][1] * d[1] + r[2][1] * d[2],
+            r[0][2] * d[0] + r[1][2] * d[1] + r[2][2] * d[2],
+        ]
+    }
+
+    /// Where world point `p` lands in the image: (x, y) in pixels and its view depth; None when it
+    /// is behind the camera or outside the image.
+    pub fn project_to_image(&self, p: [f64; 3]) -> Option<(f64, f64, f64)> {
+        let pc = self.to_camera(p);
+        if pc[2] <= 1e-6 {
+            return None;
+        }
+        let x = self.fx * pc[0] / pc[2] + self.cx;
+        let y = self.fy * pc[1] / pc[2] + self.cy;
+        (x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64).then_some((x, y, pc[2]))
+    }
+
     /// tan of half the field of view along x and y.
     pub fn tan_half_fov(&self) -> (f64, f64) {
         (0.5 * self.width as f64 / self.fx, 0.5 * self.height as f64 / self.fy)

@@ -259,17 +259,9 @@ fn never_seen(points: &[V3], cameras: &[Camera], train: &[usize], with_objects: 
         .map(|&point| {
             let seen = train.iter().any(|&t| {
                 let tc = &cameras[t];
-                let pc = tc.to_camera(point);
-                if pc[2] <= 1e-6 {
-                    return false;
-                }
-                let u = tc.fx * pc[0] / pc[2] + tc.cx;
-                let vv = tc.fy * pc[1] / pc[2] + tc.cy;
-                if u < 0.0 || vv < 0.0 || u >= tc.width as f64 || vv >= tc.height as f64 {
-                    return false;
-                }
+                let Some((u, vv, z)) = tc.project_to_image(point) else { return false };
                 let q = vv as usize * tc.width as usize + u as usize;
-                (with_objects[t].depth[q] as f64 - pc[2]).abs() <= 0.02 * pc[2]
+                (with_objects[t].depth[q] as f64 - z).abs() <= 0.02 * z
             });
             if seen {
                 0

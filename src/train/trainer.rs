@@ -261,6 +261,11 @@ impl Trainer {
         ((LR_POSITION_INIT.ln() * (1.0 - t) + LR_POSITION_FINAL.ln() * t).exp() * self.extent) as f32
     }
 
+    /// Learning rates of the SH DC coefficient and of the higher bands.
+    fn sh_lrs(&self) -> (f32, f32) {
+        (self.cfg.color_lr_gain * LR_SH_DC, self.cfg.color_lr_gain * LR_SH_REST)
+    }
+
     fn active_sh_degree(&self) -> u32 {
         if self.full_sh {
             return self.scene.sh_degree;
@@ -364,12 +369,13 @@ impl Trainer {
     fn record_fused_step(&mut self, rec: &mut Recorder, regularizer: (f32, f32)) -> Result<()> {
         let (s, m, f) = (&self.scene, &self.moments, self.frozen);
         let group = |moments, lr, lr_tail, frozen| GroupStep { moments, lr, lr_tail, frozen };
+        let (sh_dc, sh_rest) = self.sh_lrs();
         let groups = [
             group(&m.means, self.position_lr(), self.position_lr(), f.means),
             group(&m.log_scales, LR_SCALE, LR_SCALE, f.log_scales),
             group(&m.quats, LR_ROTATION, LR_ROTATION, f.quats),
             group(&m.opacity_logits, LR_OPACITY, LR_OPACITY, f.opacity),
-            group(&m.sh, self.cfg.color_lr_gain * LR_SH_DC, self.cfg.color_lr_gain * LR_SH_REST, f.sh),
+            group(&m.sh, sh_dc, sh_rest, f.sh),
         ];
         let params = self.raster.params_buffer();
         let stepped = self.sh_stepped;
@@ -416,8 +422,8 @@ impl Trainer {
             self.adam.record(rec, &s.opacity_logits, &g.opacity_logits, &m.opacity_logits, LR_OPACITY, self.step);
         }
         if !f.sh {
-            let gain = self.cfg.color_lr_gain;
-            self.adam.record_split(rec, &s.sh, &g.sh, &m.sh, (gain * LR_SH_DC, 3 * k, 3, gain * LR_SH_REST), self.step);
+            let (dc, rest) = self.sh_lrs();
+            self.adam.record_split(rec, &s.sh, &g.sh, &m.sh, (dc, 3 * k, 3, rest), self.step);
         }
         rec.mark_moved("adam", adam_bytes);
         Ok(())

@@ -54,30 +54,17 @@ const MIN_WINDOW_PIXELS: usize = 8;
 /// pixel's correction fades out.
 const FADE_PIXELS: usize = 8;
 
-/// World point of pixel `p` (center) of `camera` at view depth `z`.
+/// World point of pixel `p` (center, row-major index) of `camera` at view depth `z`.
 pub fn back_project(camera: &Camera, p: usize, z: f64) -> [f64; 3] {
     let w = camera.width as usize;
-    let (u, v) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
-    let (r, t) = (camera.rotation, camera.translation);
-    // camera-to-world: x_w = R^T (x_c - t)
-    let xc = [(u - camera.cx) / camera.fx * z - t[0], (v - camera.cy) / camera.fy * z - t[1], z - t[2]];
-    [0, 1, 2].map(|k| r[0][k] * xc[0] + r[1][k] * xc[1] + r[2][k] * xc[2])
+    camera.pixel_point(p % w, p / w, z)
 }
 
 /// Where `world` lands in source `s`: image position, pixel index and view depth; None when it
 /// is behind the camera or outside the image.
 pub fn project(s: &SourceView, world: [f64; 3]) -> Option<(f64, f64, usize, f64)> {
-    let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
-    let pc = s.camera.to_camera(world);
-    if pc[2] <= 1e-6 {
-        return None;
-    }
-    let x = s.camera.fx * pc[0] / pc[2] + s.camera.cx;
-    let y = s.camera.fy * pc[1] / pc[2] + s.camera.cy;
-    if x < 0.0 || y < 0.0 || x >= sw as f64 || y >= sh as f64 {
-        return None;
-    }
-    Some((x, y, y as usize * sw + x as usize, pc[2]))
+    let (x, y, z) = s.camera.project_to_image(world)?;
+    Some((x, y, y as usize * s.camera.width as usize + x as usize, z))
 }
 
 /// Where source `s` saw `world`, as the transfer asks (off its hole, where its original render
@@ -175,7 +162,7 @@ pub fn correct_hole_depth(
     }
     let seen = SeenPixels { camera, depth, sources, pixels };
     let n = seen.pixels.len();
-    let unchanged = DepthScale { scale: 1.0, pixels: n, cost_before: f64::NAN, cost_after: f64::NAN };
+    let unchanged = DepthScale { pixels: n, ..DepthScale::unchanged() };
     if n < MIN_PIXELS {
         return unchanged;
     }
