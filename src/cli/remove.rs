@@ -56,10 +56,10 @@ pub struct RemovalFlags {
     /// the built-in inpainter fills without the background planes.
     #[arg(long)]
     pub no_depth_guidance: bool,
-    /// Keep each hole's completed depth as it is before the color transfer (ablation). By default
-    /// it is corrected by photo-consistency: where two or more other views saw the hole's
-    /// surface, the depth at which their photos agree on its color (one factor per hole, then
-    /// per pixel within 3 % of it).
+    /// Keep each hole's completed depth as it is (ablation). By default, before the color
+    /// transfer and the fusion, it is corrected by photo-consistency: where two or more other
+    /// views saw the hole's surface, the depth at which their photos agree on its color (one
+    /// factor per hole, then per pixel within 3 % of it). Runs with --no-transfer too.
     #[arg(long)]
     pub no_photo_depth: bool,
     /// Ablation: no depth-guided color transfer (hole pixels that other views saw keep their render

@@ -6,9 +6,10 @@
 //! 2. Hole masks (select.rs): per edited view, the pixels the removed Gaussians carried, dilated;
 //!    the part the remaining Gaussians do not cover is to be synthesized.
 //! 3. Completion per view (complete/): inpainting, depth anchoring, depth refinement, the
-//!    depth's planes guiding the built-in inpainter. Then colors of hole pixels that other views
-//!    saw come from those views' captured images (complete/transfer.rs), which also corrects
-//!    covered but poorly rendered ones; only the rest of the fill stays invented.
+//!    depth's planes guiding the built-in inpainter. Then the hole's depth is corrected to where
+//!    the captured photos agree (complete/photo_depth.rs), and colors of hole pixels that other
+//!    views saw come from those views' captured images (complete/transfer.rs), which also
+//!    corrects covered but poorly rendered ones; only the rest of the fill stays invented.
 //! 4. Fusion and pruning (fuse.rs): completed depth back-projected into new Gaussians; sparse
 //!    background outliers near them pruned.
 //! 5. Refinement (refine.rs): color first, then trust-region clipped geometry.
@@ -174,17 +175,26 @@ pub fn remove(
             r["see_through_pixels"] = n.into();
         }
         clock.lap("complete");
-        // 3b. depth-guided color transfer from the views that saw the completed surface
-        if opts.stages.transfer && !photos.is_empty() {
+        // 3b. the hole depth the captured photos agree on, then 3c. colors from the views that
+        // saw the completed surface
+        if !photos.is_empty() {
             let sources = transfer_sources(&masked, cameras, photos);
             let holes: Vec<&[bool]> = masked.iter().map(|m| m.hole.as_slice()).collect();
-            let fills: Vec<&[bool]> = masked.iter().map(|m| m.fill.as_slice()).collect();
-            let moved = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
-            for (r, (n, scale)) in per_view.iter_mut().zip(moved) {
-                r["transferred_pixels"] = n.into();
-                r["hole_depth_scale"] = serde_json::to_value(scale)?;
+            if completer.photo_depth {
+                let scales = completer.correct_depths(cameras, &sources, &holes, &mut completed);
+                for (r, scale) in per_view.iter_mut().zip(scales) {
+                    r["hole_depth_scale"] = serde_json::to_value(scale)?;
+                }
+                clock.lap("photo_depth");
             }
-            clock.lap("transfer");
+            if opts.stages.transfer {
+                let fills: Vec<&[bool]> = masked.iter().map(|m| m.fill.as_slice()).collect();
+                let moved = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
+                for (r, n) in per_view.iter_mut().zip(moved) {
+                    r["transferred_pixels"] = n.into();
+                }
+                clock.lap("transfer");
+            }
         }
         // 4. fusion and pruning (or the nearest-copy baseline)
         let fviews: Vec<FuseView> = completed
@@ -218,7 +228,7 @@ pub fn remove(
     let report = serde_json::json!({
         "labels": opts.labels,
         "options": opts,
-        "completion": completer_summary(completer, &opts.stages),
+        "completion": completer_summary(completer, &opts.stages, !photos.is_empty()),
         "gaussians": { "input": scene.len(), "removed": selection.count, "pruned": pruned, "output": result.len() },
         "views": per_view,
         "fusion": fusion,
@@ -359,14 +369,14 @@ fn final_renders(
     Ok((after, bg_psnr))
 }
 
-fn completer_summary(c: &Completer, stages: &Stages) -> serde_json::Value {
+fn completer_summary(c: &Completer, stages: &Stages, photos: bool) -> serde_json::Value {
     if !stages.complete {
         return serde_json::json!(null);
     }
     serde_json::json!({
         "inpainter": c.inpainter.name(),
         "depth_guidance": c.depth_guidance,
-        "photo_consistent_hole_depth": c.photo_depth && stages.transfer,
+        "photo_consistent_hole_depth": c.photo_depth && photos,
         "depth_prior": c.prior.name(),
         "depth_refiner": c.refiner.as_ref().map(|r| r.path().display().to_string()).unwrap_or_else(|| format!("built-in edge-aware ({} sweeps)", c.refine_sweeps)),
     })

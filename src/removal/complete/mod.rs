@@ -56,7 +56,7 @@ pub struct Completer {
     /// depth rendered after removal as it is).
     pub depth_guidance: bool,
     /// Correct each hole's depth by photo-consistency across the views before the color
-    /// transfer (`photo_depth`; `false`: the ablation).
+    /// transfer and the fusion (`photo_depth`; `false`: the ablation).
     pub photo_depth: bool,
     pub seed: u64,
 }
@@ -111,12 +111,43 @@ impl Completer {
         Ok(out)
     }
 
-    /// Stage 3b, depth-guided color transfer over the whole `hole` of every view (covered pixels
+    /// Stage 3b, photo-consistent hole depth (`photo_depth`): corrects the completed depth of
+    /// every view's `hole` so that the other views' photos (`sources`, one per view) agree on its
+    /// colors. It runs before the color transfer and the fusion, and without the transfer too,
+    /// since both place points by this depth. Views are independent (the sources hold the
+    /// original renders), so they run on all cores. Returns the factor found per view.
+    pub fn correct_depths(
+        &self,
+        cameras: &[Camera],
+        sources: &[SourceView],
+        holes: &[&[bool]],
+        completed: &mut [Completed],
+    ) -> Vec<DepthScale> {
+        if !self.photo_depth {
+            return vec![DepthScale::unchanged(); completed.len()];
+        }
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(completed.len().max(1));
+        let mut scales = vec![DepthScale::unchanged(); completed.len()];
+        let per = completed.len().div_ceil(threads).max(1);
+        std::thread::scope(|scope| {
+            for (t, (chunk, out)) in completed.chunks_mut(per).zip(scales.chunks_mut(per)).enumerate() {
+                scope.spawn(move || {
+                    for (k, (c, scale)) in chunk.iter_mut().zip(out).enumerate() {
+                        let i = t * per + k;
+                        *scale =
+                            correct_hole_depth(i, &cameras[i], &mut c.depth, holes[i], sources, TRANSFER_TOLERANCE);
+                    }
+                });
+            }
+        });
+        scales
+    }
+
+    /// Stage 3c, depth-guided color transfer over the whole `hole` of every view (covered pixels
     /// render background that few views constrained): pixels whose completed surface point another
     /// view saw take that view's captured color (`sources`, one per view), and what no view saw
     /// of `fill` is inpainted again, now from the transferred colors too. Returns the number of
-    /// transferred pixels per view and the factor each view's hole depth was corrected by first
-    /// (`photo_depth`).
+    /// transferred pixels per view.
     pub fn transfer_colors(
         &mut self,
         cameras: &[Camera],
@@ -124,18 +155,7 @@ impl Completer {
         holes: &[&[bool]],
         fills: &[&[bool]],
         completed: &mut [Completed],
-    ) -> Result<Vec<(usize, DepthScale)>> {
-        // every correction from the depths as completed (the sources hold the original renders)
-        let scales: Vec<DepthScale> = completed
-            .iter_mut()
-            .enumerate()
-            .map(|(i, c)| {
-                if !self.photo_depth {
-                    return DepthScale::unchanged();
-                }
-                correct_hole_depth(i, &cameras[i], &mut c.depth, holes[i], sources, TRANSFER_TOLERANCE)
-            })
-            .collect();
+    ) -> Result<Vec<usize>> {
         let found: Vec<Transfer> = (0..completed.len())
             .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE))
             .collect();
@@ -158,7 +178,7 @@ impl Completer {
                 let k = Intrinsics::from(&cameras[i]);
                 c.rgb = self.inpaint_again(i, &image, &rest, &avoid, (&c.surfaces, &c.planes, &k), w, h)?;
             }
-            counts.push((n, scales[i]));
+            counts.push(n);
         }
         Ok(counts)
     }

@@ -89,7 +89,8 @@ impl SeenPixels<'_> {
     fn variance(&self, i: usize, scale: f64) -> Option<f64> {
         let (p, views) = &self.pixels[i];
         let world = back_project(self.camera, *p, self.depth[*p] as f64 * scale);
-        let mut colors: Vec<[f32; 3]> = Vec::with_capacity(views.len());
+        // sums and sums of squares: no allocation per call (it runs ~100 times per pixel)
+        let (mut k, mut sum, mut squares) = (0usize, [0f64; 3], [0f64; 3]);
         for &j in views {
             let s = &self.sources[j];
             let Some((x, y, q, _)) = project(s, world) else { continue };
@@ -97,18 +98,18 @@ impl SeenPixels<'_> {
                 continue;
             }
             let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
-            colors.push([0, 1, 2].map(|c| sample_bilinear(s.photo, sw, sh, c, x, y)));
+            for c in 0..3 {
+                let v = sample_bilinear(s.photo, sw, sh, c, x, y) as f64;
+                sum[c] += v;
+                squares[c] += v * v;
+            }
+            k += 1;
         }
-        if colors.len() < 2 {
+        if k < 2 {
             return None;
         }
-        let k = colors.len() as f64;
-        let mut sum = 0.0;
-        for c in 0..3 {
-            let mean = colors.iter().map(|v| v[c] as f64).sum::<f64>() / k;
-            sum += colors.iter().map(|v| (v[c] as f64 - mean).powi(2)).sum::<f64>() / k;
-        }
-        Some(sum)
+        let k = k as f64;
+        Some((0..3).map(|c| (squares[c] / k - (sum[c] / k).powi(2)).max(0.0)).sum())
     }
 
     /// Mean variance over all pixels at one scale.
