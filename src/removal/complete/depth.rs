@@ -22,7 +22,7 @@
 //! Either model may name its single input and output as it likes.
 
 use super::harmonic::harmonic_fill;
-use super::surfaces::surfaces_around;
+use super::surfaces::{flanking, surfaces_around};
 use crate::image_ops::{feather, resize_bilinear};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
@@ -136,12 +136,16 @@ impl DepthPrior {
                 let disparity: Vec<f32> =
                     (0..w * h).map(|i| if known[i] { 1.0 / v.render_depth[i] } else { 0.0 }).collect();
                 let mut filled = harmonic_fill(&disparity, &known, w, h, 1);
-                // the planes around the unknown part continue into it, meeting at creases; the
-                // harmonic interpolant stays where no plane is plausible
+                // the planes around the unknown part continue into it between their own pixels
+                // (`flanking`), meeting at creases; the harmonic interpolant stays where no plane
+                // is plausible
                 let unknown: Vec<bool> = known.iter().map(|&k| !k).collect();
                 let surfaces = surfaces_around(&disparity, &known, &unknown, w, h, PLANE_SEED);
+                let known_depth: Vec<f32> =
+                    (0..w * h).map(|i| if known[i] { v.render_depth[i] } else { 0.0 }).collect();
+                let flanks = flanking(&surfaces.flank_labels(&known_depth, w), &unknown, w, h);
                 for i in (0..w * h).filter(|&i| unknown[i]) {
-                    if let Some((_, d)) = surfaces.visible(i, w) {
+                    if let Some((_, d)) = surfaces.visible_among(i, w, flanks[i]) {
                         filled[i] = d as f32;
                     }
                 }

@@ -196,9 +196,14 @@ pub struct Surfaces {
 impl Surfaces {
     /// The visible plane at pixel `i` and its disparity.
     pub fn visible(&self, i: usize, w: usize) -> Option<(usize, f64)> {
+        self.visible_among(i, w, u32::MAX)
+    }
+
+    /// The visible plane at pixel `i` among the planes in the bit set `candidates`.
+    pub fn visible_among(&self, i: usize, w: usize, candidates: u32) -> Option<(usize, f64)> {
         let (x, y) = center(i, w);
         let mut best: Option<(usize, f64)> = None;
-        for (s, p) in self.planes.iter().enumerate() {
+        for (s, p) in self.planes.iter().enumerate().filter(|(s, _)| candidates & (1 << s) != 0) {
             let d = p.disparity(x, y);
             if !(d >= self.lo && d <= self.hi) {
                 continue;
@@ -232,16 +237,25 @@ impl Surfaces {
             .map(|(s, _)| s)
     }
 
-    /// `labels`, except that each `fill` pixel takes the plane seen there (`visible`): its
-    /// completed depth blends the plane with the render near the fill's edge and may lie off it.
+    /// `labels`, except that each `fill` pixel takes the plane seen there among those that
+    /// flank it (`visible_among`, `flanking`): its completed depth blends the plane with the
+    /// render near the fill's edge and may lie off it.
     pub fn fill_labels(&self, depth: &[f32], fill: &[bool], w: usize) -> Vec<u8> {
         let mut labels = self.labels(depth, w);
+        let flanks = flanking(&self.flank_labels(depth, w), fill, w, labels.len() / w);
         for (i, l) in labels.iter_mut().enumerate().filter(|(i, _)| fill[*i]) {
-            if let Some((s, _)) = self.visible(i, w) {
-                *l = s as u8 + 1;
-            }
+            *l = self.visible_among(i, w, flanks[i]).map_or(0, |(s, _)| s as u8 + 1);
         }
         labels
+    }
+
+    /// As `labels`, within FLANK_TOLERANCE: which plane a pixel supports as a flank of a hole.
+    pub fn flank_labels(&self, depth: &[f32], w: usize) -> Vec<u8> {
+        depth
+            .iter()
+            .enumerate()
+            .map(|(i, &d)| self.member_within(i, w, 1.0 / d as f64, FLANK_TOLERANCE).map_or(0, |s| s as u8 + 1))
+            .collect()
     }
 
     /// Per pixel, 1 + the plane the depth `depth` lies on, or 0.
@@ -252,6 +266,45 @@ impl Surfaces {
             .map(|(i, &d)| self.member_within(i, w, 1.0 / d as f64, LABEL_TOLERANCE).map_or(0, |s| s as u8 + 1))
             .collect()
     }
+}
+
+/// Known pixels looked at beyond the edge of the unknown region, in each direction, and how far
+/// (relative disparity) from a plane they may scatter and still continue it into the region:
+/// looser than LABEL_TOLERANCE, since it only says whether the plane goes on, not whose colors
+/// a pixel takes.
+const FLANK_DEPTH: usize = 3;
+const FLANK_TOLERANCE: f64 = 0.2;
+
+/// Per `unknown` pixel, the bit set of the planes that flank it (`labels`: 1 + plane of the known
+/// pixels, 0 none): a plane whose known pixels lie just beyond the unknown region on both sides
+/// along the pixel's row or column, or on one side along each (a corner). A plane continues into
+/// a hole between its own pixels, not past them: the side of a statue's pedestal, seen only below
+/// the hole, must not cover the lawn above it.
+pub fn flanking(labels: &[u8], unknown: &[bool], w: usize, h: usize) -> Vec<u32> {
+    let mut out = vec![0u32; w * h];
+    // the planes of the first FLANK_DEPTH known pixels from pixel (x, y) stepping (dx, dy)
+    let side = |x: usize, y: usize, dx: isize, dy: isize| {
+        let (mut x, mut y, mut seen, mut bits) = (x as isize, y as isize, 0, 0u32);
+        loop {
+            (x, y) = (x + dx, y + dy);
+            if x < 0 || y < 0 || x >= w as isize || y >= h as isize || seen == FLANK_DEPTH {
+                return bits;
+            }
+            let i = y as usize * w + x as usize;
+            if !unknown[i] {
+                seen += 1;
+                if labels[i] > 0 {
+                    bits |= 1 << (labels[i] - 1);
+                }
+            }
+        }
+    };
+    for i in (0..w * h).filter(|&i| unknown[i]) {
+        let (x, y) = (i % w, i / w);
+        let (l, r, u, d) = (side(x, y, -1, 0), side(x, y, 1, 0), side(x, y, 0, -1), side(x, y, 0, 1));
+        out[i] = (l & r) | (u & d) | ((l | r) & (u | d));
+    }
+    out
 }
 
 /// Finds the surfaces around the `hole` from the disparity `disp` of the `known` pixels within a
@@ -434,6 +487,40 @@ mod tests {
                 assert_eq!(near[i], truth[i], "pixel {i} 6 % off");
                 assert_ne!(far[i], truth[i], "pixel {i} 15 % off");
             }
+        }
+    }
+
+    /// A statue's hole: the pedestal's face (a near plane) shows only below and beside the hole's
+    /// bottom rows, bushes (a far plane) only well above it, and a lawn too rough for any plane
+    /// beside the rest. Seen nearest first, the pedestal's plane would cover the whole hole; it
+    /// continues only between its own pixels, and the rows flanked by nothing are left unlabelled.
+    #[test]
+    fn a_plane_continues_into_a_hole_only_between_its_own_pixels() {
+        let (w, h) = (64, 48);
+        let pedestal = Plane { a: 0.0, b: 0.0, c: 0.5 };
+        let bushes = Plane { a: 0.0, b: 0.0, c: 0.2 };
+        let s = Surfaces { planes: vec![pedestal, bushes], nearest_first: true, lo: 0.0, hi: 10.0 };
+        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                if hole[i] {
+                    3.0
+                } else if y >= 30 && (16..48).contains(&x) {
+                    2.0
+                } else if y < 8 {
+                    5.0
+                } else {
+                    // lawn: disparity 0.3 scattered 15 %, 40 % or more off both planes
+                    (1.0 + 0.15 * (1 - 2 * (i % 2) as i32) as f32) / 0.3
+                }
+            })
+            .collect();
+        let labels = s.fill_labels(&depth, &hole, w);
+        for i in (0..w * h).filter(|&i| hole[i]) {
+            assert_eq!(s.visible(i, w).unwrap().0, 0, "nearest first, the pedestal is in front everywhere");
+            let expected = if i / w >= 30 { 1 } else { 0 };
+            assert_eq!(labels[i], expected, "hole pixel ({}, {})", i % w, i / w);
         }
     }
 
