@@ -411,16 +411,8 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     // pixels whose wall point lies inside two or more sources' images are measured; the others
     // (at the hole's edge near the image border) fade towards their completed depth
     let seen_twice = |p: usize| {
-        let (u, v) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
-        let c = &cams[0];
-        let pc = [(u - c.cx) / c.fx * 5.0, (v - c.cy) / c.fy * 5.0, 5.0];
-        let pt = [0, 1, 2].map(|k| c.center()[k] + (0..3).map(|j| c.rotation[j][k] * pc[j]).sum::<f64>());
-        let inside = |s: &Camera| {
-            let q = s.to_camera(pt);
-            let (x, y) = (s.fx * q[0] / q[2] + s.cx, s.fy * q[1] / q[2] + s.cy);
-            x >= 0.0 && y >= 0.0 && x < w as f64 && y < h as f64
-        };
-        cams[1..].iter().filter(|s| inside(s)).count() >= 2
+        let pt = cams[0].pixel_point(p % w, p / w, 5.0);
+        cams[1..].iter().filter(|s| s.project_to_image(pt).is_some()).count() >= 2
     };
     let error = |p: usize| (completed[p] as f64 / 5.0 - 1.0).abs();
     let mut errors: Vec<f64> = (0..w * h).filter(|&p| hole[p] && seen_twice(p)).map(error).collect();

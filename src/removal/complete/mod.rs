@@ -115,7 +115,8 @@ impl Completer {
     /// every view's `hole` so that the other views' photos (`sources`, one per view) agree on its
     /// colors. It runs before the color transfer and the fusion, and without the transfer too,
     /// since both place points by this depth. Views are independent (the sources hold the
-    /// original renders), so they run on all cores. Returns the factor found per view.
+    /// original renders), so they run on all cores. Returns the factor found per view. The
+    /// pipeline calls it when `photo_depth` is set.
     pub fn correct_depths(
         &self,
         cameras: &[Camera],
@@ -123,9 +124,6 @@ impl Completer {
         holes: &[&[bool]],
         completed: &mut [Completed],
     ) -> Vec<DepthScale> {
-        if !self.photo_depth {
-            return vec![DepthScale::unchanged(); completed.len()];
-        }
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(completed.len().max(1));
         let mut scales = vec![DepthScale::unchanged(); completed.len()];
         let per = completed.len().div_ceil(threads).max(1);

@@ -220,7 +220,6 @@ pub fn correct_hole_depth(
             factor[*p] = s;
         }
     }
-    // the rest of the hole continues the factor of the nearest pixel that was scored
     // the rest of the hole: the factor of the nearest scored pixel, fading to 1 over
     // `FADE_PIXELS`. Away from what two views saw it is a guess, and there it pushed the tail of
     // the never-seen depths behind the surface (floaters on the bench scenes: 137 -> 94 mean).

@@ -251,19 +251,20 @@ impl Surfaces {
 
     /// As `labels`, within FLANK_TOLERANCE: which plane a pixel supports as a flank of a hole.
     pub fn flank_labels(&self, depth: &[f32], w: usize) -> Vec<u8> {
-        depth
-            .iter()
-            .enumerate()
-            .map(|(i, &d)| self.member_within(i, w, 1.0 / d as f64, FLANK_TOLERANCE).map_or(0, |s| s as u8 + 1))
-            .collect()
+        self.labels_within(depth, w, FLANK_TOLERANCE)
     }
 
     /// Per pixel, 1 + the plane the depth `depth` lies on, or 0.
     pub fn labels(&self, depth: &[f32], w: usize) -> Vec<u8> {
+        self.labels_within(depth, w, LABEL_TOLERANCE)
+    }
+
+    /// Per pixel, 1 + the plane within `tolerance` (relative disparity) of the depth, or 0.
+    fn labels_within(&self, depth: &[f32], w: usize, tolerance: f64) -> Vec<u8> {
         depth
             .iter()
             .enumerate()
-            .map(|(i, &d)| self.member_within(i, w, 1.0 / d as f64, LABEL_TOLERANCE).map_or(0, |s| s as u8 + 1))
+            .map(|(i, &d)| self.member_within(i, w, 1.0 / d as f64, tolerance).map_or(0, |s| s as u8 + 1))
             .collect()
     }
 }
