@@ -7,7 +7,8 @@
 //! inside that view's hole more than `tolerance` (relative) in front of that view's completed depth,
 //! i.e. it would float in front of the surface another view completed. Points behind it are only
 //! occluded there and are kept. One owner per surface point: views are taken largest fill first, and
-//! a point is dropped where an earlier view completed the same surface (`FuseConfig::one_owner`).
+//! a point is dropped where an earlier view completed the same surface and kept its own point there
+//! (`FuseConfig::one_owner`).
 //! Points that still fall in one voxel (the median footprint) are merged: position and color
 //! averaged.
 //!
@@ -102,10 +103,10 @@ pub struct FuseConfig {
     pub opacity: f32,
     /// Each surface point of the fill is made from one view only: the views are taken in order of
     /// their fill size, and a point is dropped when a view earlier in that order completed the same
-    /// surface there (its fill, within `tolerance` of its depth). Without it every view's points
-    /// were kept and merged per voxel, so the patch held layers of nearly coincident Gaussians whose
-    /// colors the render averaged (bench/RESULTS.md: held-out masked PSNR 0.3-1.0 dB and
-    /// seen-elsewhere PSNR 1.0-1.5 dB lower).
+    /// surface there (its fill, within `tolerance` of its depth) and kept its own point there.
+    /// Without it every view's points were kept and merged per voxel, so the patch held layers of
+    /// nearly coincident Gaussians whose colors the render averaged (bench/RESULTS.md: held-out
+    /// masked PSNR 0.3-1.0 dB and seen-elsewhere PSNR 1.0-1.5 dB lower).
     pub one_owner: bool,
 }
 
@@ -144,9 +145,16 @@ fn owner_order(views: &[FuseView]) -> Vec<usize> {
     order
 }
 
-/// Does `o` complete the surface point `p`: it lands in o's fill within `tolerance` of o's depth?
-fn same_surface(o: &FuseView, p: [f64; 3], tolerance: f32) -> bool {
-    land(o, p).is_some_and(|(q, z)| o.fill[q] && (z - o.depth[q] as f64).abs() <= o.depth[q] as f64 * tolerance as f64)
+/// Does `o` own the surface point `p`: it lands in o's fill within `tolerance` of o's depth, at a
+/// pixel whose own point `o` kept (`kept`, on the sampling grid of `stride`)? An owner whose point
+/// there was dropped as inconsistent owns nothing: counting it left holes in the patch where
+/// neither view's point survived (the background showed through as dark specks).
+fn owns(o: &FuseView, kept: &[bool], stride: usize, p: [f64; 3], tolerance: f32) -> bool {
+    let Some((x, y, z)) = o.camera.project_to_image(p) else { return false };
+    let w = o.camera.width as usize;
+    let q = y as usize * w + x as usize;
+    let sampled = (y as usize - y as usize % stride) * w + (x as usize - x as usize % stride);
+    o.fill[q] && kept[sampled] && (z - o.depth[q] as f64).abs() <= o.depth[q] as f64 * tolerance as f64
 }
 
 /// Back-projects, checks consistency across views and merges.
@@ -155,6 +163,8 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
     let stride = cfg.stride.max(1);
     let mut points = Vec::new();
     let order = if cfg.one_owner { owner_order(views) } else { (0..views.len()).collect() };
+    // per view, the sampled pixels whose point was kept
+    let mut kept: Vec<Vec<bool>> = views.iter().map(|v| vec![false; v.fill.len()]).collect();
     for (rank, &vi) in order.iter().enumerate() {
         let v = &views[vi];
         let (w, h) = (v.camera.width as usize, v.camera.height as usize);
@@ -177,10 +187,13 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
                     stats.inconsistent += 1;
                     continue;
                 }
-                if cfg.one_owner && order[..rank].iter().any(|&vj| same_surface(&views[vj], p, cfg.tolerance)) {
+                if cfg.one_owner
+                    && order[..rank].iter().any(|&vj| owns(&views[vj], &kept[vj], stride, p, cfg.tolerance))
+                {
                     stats.owned_elsewhere += 1;
                     continue;
                 }
+                kept[vi][i] = true;
                 let footprint = z * stride as f64 / v.camera.fx.min(v.camera.fy);
                 points.push(PatchPoint { position: p, rgb: [v.rgb[i], v.rgb[hw + i], v.rgb[2 * hw + i]], footprint });
             }
@@ -348,6 +361,42 @@ mod tests {
         assert!((190..=210).contains(&blue), "{blue} points of b's own part");
         assert_eq!(mixed, 0, "points that averaged the two inventions");
         assert!(mixed_avg >= 100, "averaging fusion mixed only {mixed_avg} points");
+    }
+
+    /// Views a and b share a camera and fill the same square of a plane, a at depth 3 (red), b 2 %
+    /// farther (blue, the same surface within the tolerance); c, beside them, completes the left
+    /// half 4 % farther still (green). a's left half floats in front of c's completion and is
+    /// dropped, so a owns only its right half: b must own the left half, and c's points there are
+    /// b's surface. Counting a as the owner of what it dropped (and b as the owner of what it
+    /// then lost to a) left the left half with no point at all: the specks of background seen
+    /// through the bench's patches.
+    #[test]
+    fn a_view_owns_only_the_points_it_kept() {
+        let cam =
+            |name: &str, x: f64| Camera::look_at(name, 40, 40, 60.0, [x, 0.0, 0.0], [x, 0.0, 3.0], [0.0, -1.0, 0.0]);
+        let (a, b, c) = (cam("a", 0.0), cam("b", 0.0), cam("c", -0.2));
+        let square = |x0: usize, x1: usize| -> Vec<bool> {
+            (0..1600).map(|i| (x0..x1).contains(&(i % 40)) && (10..30).contains(&(i / 40))).collect()
+        };
+        // c sits 4 pixels (at depth 3) to the left: its columns 14..24 see a's columns 10..20
+        let (fill_ab, fill_c) = (square(10, 30), square(14, 24));
+        let color = |c: [f32; 3]| -> Vec<f32> { c.iter().flat_map(|&v| vec![v; 1600]).collect() };
+        let (red, blue, green) = (color([1.0, 0.0, 0.0]), color([0.0, 0.0, 1.0]), color([0.0, 1.0, 0.0]));
+        let (za, zb, zc) = (vec![3.0f32; 1600], vec![3.06f32; 1600], vec![3.12f32; 1600]);
+        let views = [
+            FuseView { camera: &a, rgb: &red, depth: &za, fill: &fill_ab },
+            FuseView { camera: &b, rgb: &blue, depth: &zb, fill: &fill_ab },
+            FuseView { camera: &c, rgb: &green, depth: &zc, fill: &fill_c },
+        ];
+        let (points, stats) = fuse_points(&views, &FuseConfig::default());
+        let count = |c: [f32; 3]| points.iter().filter(|p| p.rgb == c).count();
+        let (r, bl, g) = (count([1.0, 0.0, 0.0]), count([0.0, 0.0, 1.0]), count([0.0, 1.0, 0.0]));
+        println!("{stats:?}: red {r}, blue {bl}, green {g}");
+        assert_eq!(stats.inconsistent, 200, "a's left half floats in front of c");
+        assert_eq!(r, 200, "a keeps its right half");
+        assert!((190..=200).contains(&bl), "b owns the left half: {bl} points");
+        assert_eq!(g, 0, "c's farther points are b's surface");
+        assert_eq!(r + bl + g, points.len());
     }
 
     #[test]
