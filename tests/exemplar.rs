@@ -3,7 +3,8 @@
 //! Texture must continue into the hole with its period, each surface from itself, far better than
 //! the smooth harmonic fill; pixels outside the hole are untouched and runs are deterministic. A
 //! floor seen in perspective (exact ground truth from ray casting) must continue in phase when
-//! synthesized in the plane's rectified frame.
+//! synthesized in the plane's rectified frame. The completed depth keeps a far background out of
+//! a near surface's fill even where no plane was found.
 
 mod common;
 
@@ -138,7 +139,7 @@ fn exemplar_copies_no_texture_from_avoided_pixels() {
         (0..W * H).filter(|&i| hole[i]).filter(|&i| img[W * H + i] - img[i].max(img[2 * W * H + i]) > 0.3).count()
     };
     let ex = ExemplarFill::new(&gpu, 7).unwrap();
-    let avoiding = ex.fill_avoiding(&input, &hole, &leftover, &labels, W, H).unwrap();
+    let avoiding = ex.fill_avoiding(&input, &hole, &leftover, &labels, None, W, H).unwrap();
     let plain = ex.fill(&input, &hole, &labels, W, H).unwrap();
     assert_outside_unchanged(&avoiding, &input, &hole);
     let (with, without) = (green(&avoiding), green(&plain));
@@ -195,7 +196,7 @@ fn rectified_fill_continues_a_receding_checkerboard_in_phase() {
     let input = punched(&truth, &hole);
     let ex = ExemplarFill::new(&gpu, 7).unwrap();
     let none = vec![false; W * H];
-    let rectified = ex.fill_rectified(&input, &hole, &none, &labels, &[plane], &k, W, H).unwrap();
+    let rectified = ex.fill_rectified(&input, &hole, &none, &labels, None, &[plane], &k, W, H).unwrap();
     let in_image = ex.fill(&input, &hole, &labels, W, H).unwrap();
     assert_outside_unchanged(&rectified, &input, &hole);
     let harmonic = fill_by_surface(&input, &hole, &labels, W, H, 3);
@@ -215,6 +216,50 @@ fn rectified_fill_continues_a_receding_checkerboard_in_phase() {
     // when written: rectified 19.9 dB, in the image 11.8 dB, harmonic 11.4 dB
     assert!(pr > pi + 4.0, "rectified {pr:.2} dB vs in the image {pi:.2} dB");
     assert!(pr > 17.0, "rectified {pr:.2} dB");
-    let again = ex.fill_rectified(&input, &hole, &none, &labels, &[plane], &k, W, H).unwrap();
+    let again = ex.fill_rectified(&input, &hole, &none, &labels, None, &[plane], &k, W, H).unwrap();
     assert_eq!(rectified, again, "the rectified fill is deterministic");
+}
+
+#[test]
+fn completed_depth_keeps_a_far_smooth_background_out_of_a_near_textured_fill() {
+    // the statue's case: a hole in a near lawn (grainy texture) below a far, defocused background
+    // of the lawn's own mean color. The first estimate is smooth, and a smooth patch matches the
+    // far background best, so without depth the fill stays a smooth blob; with the completed
+    // disparity the far sources pay for their distance and the lawn continues
+    use cogeo::rng::Rng;
+    let gpu = common::gpu();
+    let mean = [0.3f32, 0.5, 0.2];
+    let mut rng = Rng::new(11);
+    let mut truth = vec![0f32; 3 * W * H];
+    for i in 0..W * H {
+        let grain = if i / W >= 30 { (rng.next_u64() % 1000) as f32 / 1000.0 - 0.5 } else { 0.0 };
+        for c in 0..3 {
+            truth[c * W * H + i] = mean[c] + 0.5 * grain;
+        }
+    }
+    // depth 20 above row 30, 2 below (the hole's completed depth continues the lawn)
+    let disparity: Vec<f32> = (0..W * H).map(|i| if i / W >= 30 { 0.5 } else { 0.05 }).collect();
+    let hole: Vec<bool> = (0..W * H).map(|i| (30..66).contains(&(i % W)) && (42..64).contains(&(i / W))).collect();
+    let input = punched(&truth, &hole);
+    let (labels, none) = (vec![0u8; W * H], vec![false; W * H]);
+    let ex = ExemplarFill::new(&gpu, 7).unwrap();
+    let guided = ex.fill_avoiding(&input, &hole, &none, &labels, Some(&disparity), W, H).unwrap();
+    let unguided = ex.fill_avoiding(&input, &hole, &none, &labels, None, W, H).unwrap();
+    assert_outside_unchanged(&guided, &input, &hole);
+    // the green channel's variance over the hole, against the lawn's
+    let variance = |img: &[f32], mask: &dyn Fn(usize) -> bool| {
+        let v: Vec<f64> = (0..W * H).filter(|&i| mask(i)).map(|i| img[W * H + i] as f64).collect();
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len() as f64
+    };
+    let lawn = variance(&truth, &|i| i / W >= 30 && !hole[i]);
+    let (g, u) = (variance(&guided, &|i| hole[i]), variance(&unguided, &|i| hole[i]));
+    eprintln!("hole variance / lawn variance: with depth {:.2}, without {:.2}", g / lawn, u / lawn);
+    // when written: 0.52 with depth (the vote averages a few patches), 0.00 without
+    assert!(g > 0.3 * lawn, "with depth the fill has {:.2} of the lawn's variance", g / lawn);
+    assert!(
+        u < 0.25 * lawn,
+        "without depth the fill has {:.2} of the lawn's variance: the test shows nothing",
+        u / lawn
+    );
 }

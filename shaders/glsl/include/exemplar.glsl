@@ -29,11 +29,17 @@ layout(push_constant) uniform Push {
     uint seed;
     uint radius;      // largest random-search radius
     float label_penalty;  // added to the distance of a source on another surface
+    float depth_weight;   // times ln(source / target disparity)^2, added to the distance (0: off)
+    uint pad;
+    Floats disparity;     // per pixel, 1 / depth (the hole's completed); 0 = unknown
 };
 
 // Mean squared RGB difference between the patch at target t and the patch at source s, over the
 // target patch's pixels inside the image and on the target's surface (a kept object in front of
-// the hole must not pull the match toward its own edge), plus the surface penalty.
+// the hole must not pull the match toward its own edge), plus the surface penalty and the depth
+// term: a source at another distance than the target is another surface even where no plane was
+// found (a lawn behind a statue must not copy the blurred trees far behind it, whose smoothness
+// matches a smooth first estimate best).
 // Stops early (returning a value above `bound`) once the partial sum already exceeds `bound` for
 // every pixel the patch could still count: the candidate cannot win.
 float patch_distance(ivec2 t, ivec2 s, uint t_label, float bound) {
@@ -61,5 +67,12 @@ float patch_distance(ivec2 t, ivec2 s, uint t_label, float bound) {
     float dist = acc / float(3 * max(used, 1));
     uint s_label = label_of(info.v[uint(s.y) * width + uint(s.x)]);
     if (t_label != 0 && s_label != t_label) dist += label_penalty;
+    if (depth_weight > 0.0) {
+        float dt = disparity.v[uint(t.y) * width + uint(t.x)], ds = disparity.v[uint(s.y) * width + uint(s.x)];
+        if (dt > 0.0 && ds > 0.0) {
+            float r = log(ds / dt);
+            dist += depth_weight * r * r;
+        }
+    }
     return dist;
 }

@@ -5,9 +5,11 @@
 //! becomes the vote of what those patches put on it, and the two steps alternate. The completed
 //! depth guides it: a source on another background surface than the target's (the planes of
 //! `surfaces.rs`) pays a penalty larger than any color distance, so the floor continues the floor's
-//! texture and the wall the wall's. Matches are translations; on a receding floor the patch
-//! distance itself prefers sources at the same distance (the same rows), where the texture has the
-//! target's period. The coarsest level starts from the surface-wise harmonic fill.
+//! texture and the wall the wall's; and a source at another distance than the target pays for the
+//! log ratio of the two, so that where no plane was found (a lawn) the fill still comes from its
+//! own distance, not from a far, blurred background. Matches are translations; on a receding
+//! floor the depth term prefers sources at the same distance (the same rows), where the texture
+//! has the target's period. The coarsest level starts from the surface-wise harmonic fill.
 //! `fill_rectified` goes further where the camera is known: each plane's pixels are synthesized
 //! in that plane's own frame (rectify.rs), where the texture has one period everywhere.
 //!
@@ -32,6 +34,10 @@ const SOURCE: u32 = 2;
 const TARGET: u32 = 4;
 /// Added to the patch distance (mean squared RGB difference, at most 1) of a source on another surface.
 const LABEL_PENALTY: f32 = 1.0;
+/// Added to the patch distance per squared log ratio of the source's and the target's disparity
+/// (where both are known): a source at twice or half the target's distance pays 0.05, a large color
+/// difference; one 10 % nearer or farther 0.0009, about what a good match differs by in color.
+pub const DEPTH_WEIGHT: f32 = 0.1;
 /// The vote's weight scale: exp(-(distance - best) / VOTE_SIGMA2).
 const VOTE_SIGMA2: f32 = 0.0005;
 /// Search-then-vote rounds on the coarsest level (which finds the layout) and on the finer ones
@@ -64,6 +70,9 @@ struct ExemplarPush {
     seed: u32,
     radius: u32,
     label_penalty: f32,
+    depth_weight: f32,
+    pad: u32,
+    disparity: u64,
 }
 
 /// One level of the pyramid over the crop around the hole.
@@ -77,6 +86,8 @@ struct Level {
     /// Known pixels no source patch may contain.
     avoid: Vec<bool>,
     labels: Vec<u8>,
+    /// 1 / depth per pixel (the hole's completed depth); 0 = unknown, or no depth guidance at all.
+    disparity: Vec<f32>,
 }
 
 impl Level {
@@ -127,17 +138,28 @@ impl Level {
     fn coarser(&self) -> Level {
         let (w, h) = (self.w.div_ceil(2), self.h.div_ceil(2));
         let (n, fine_n) = (w * h, self.w * self.h);
-        let mut out =
-            Level { w, h, image: vec![0.0; 3 * n], hole: vec![false; n], avoid: vec![false; n], labels: vec![0; n] };
+        let mut out = Level {
+            w,
+            h,
+            image: vec![0.0; 3 * n],
+            hole: vec![false; n],
+            avoid: vec![false; n],
+            labels: vec![0; n],
+            disparity: if self.disparity.is_empty() { Vec::new() } else { vec![0.0; n] },
+        };
         for y in 0..h {
             for x in 0..w {
                 let i = y * w + x;
-                let mut known = 0;
+                let (mut known, mut with_depth) = (0, 0);
                 for (fx, fy) in [(2 * x, 2 * y), (2 * x + 1, 2 * y), (2 * x, 2 * y + 1), (2 * x + 1, 2 * y + 1)] {
                     if fx >= self.w || fy >= self.h {
                         continue;
                     }
                     let f = fy * self.w + fx;
+                    if let Some(&d) = self.disparity.get(f).filter(|&&d| d > 0.0) {
+                        out.disparity[i] += d;
+                        with_depth += 1;
+                    }
                     out.hole[i] |= self.hole[f];
                     out.avoid[i] |= self.avoid[f];
                     if !self.hole[f] {
@@ -149,6 +171,9 @@ impl Level {
                 }
                 for c in 0..3 {
                     out.image[c * n + i] /= known.max(1) as f32;
+                }
+                if with_depth > 0 {
+                    out.disparity[i] /= with_depth as f32;
                 }
                 out.labels[i] = self.labels[2 * y * self.w + 2 * x];
             }
@@ -182,14 +207,15 @@ impl ExemplarFill {
     /// image around the hole; `labels` (0 = none) keep each surface's pixels on that surface.
     /// Pixels outside `fill` are returned unchanged.
     pub fn fill(&self, image: &[f32], fill: &[bool], labels: &[u8], w: usize, h: usize) -> Result<Vec<f32>> {
-        self.fill_avoiding(image, fill, &vec![false; w * h], labels, w, h)
+        self.fill_avoiding(image, fill, &vec![false; w * h], labels, None, w, h)
     }
 
     /// `fill_avoiding`, with the pixels of each background plane (label 1 + its index in
     /// `planes`, seen through `k`) synthesized in the plane's rectified frame from that plane's
     /// known pixels, so that a receding checkerboard keeps its period and phase. Pixels no plane
     /// takes (label 0, off their plane, or a plane whose grid has fewer source patches than hole
-    /// texels) are synthesized in the image afterwards, with the planes' results as known pixels.
+    /// texels) are synthesized in the image afterwards, with the planes' results as known pixels
+    /// and `disparity` guiding them (`fill_avoiding`).
     #[allow(clippy::too_many_arguments)]
     pub fn fill_rectified(
         &self,
@@ -197,6 +223,7 @@ impl ExemplarFill {
         fill: &[bool],
         avoid: &[bool],
         labels: &[u8],
+        disparity: Option<&[f32]>,
         planes: &[Plane],
         k: &Intrinsics,
         w: usize,
@@ -215,6 +242,7 @@ impl ExemplarFill {
                 hole: grid.hole.clone(),
                 avoid: grid.avoid.clone(),
                 labels: grid.labels.clone(),
+                disparity: Vec::new(),
             };
             let sources = level.info().iter().filter(|&&bits| bits & SOURCE != 0).count();
             if sources < grid.hole.iter().filter(|&&x| x).count() {
@@ -222,26 +250,32 @@ impl ExemplarFill {
                 // membership) to lend whole patches: the image-space synthesis below does better
                 continue;
             }
-            let filled = self.fill_avoiding(&grid.image, &grid.hole, &grid.avoid, &grid.labels, grid.w, grid.h)?;
+            // every texel of the grid lies on the plane: no depth to tell surfaces apart
+            let filled =
+                self.fill_avoiding(&grid.image, &grid.hole, &grid.avoid, &grid.labels, None, grid.w, grid.h)?;
             let written = grid.write_back(&filled, &mut out, fill, labels, label, w, h);
             for (r, &done) in rest.iter_mut().zip(&written) {
                 *r &= !done;
             }
         }
         if rest.iter().any(|&r| r) {
-            out = self.fill_avoiding(&out, &rest, avoid, labels, w, h)?;
+            out = self.fill_avoiding(&out, &rest, avoid, labels, disparity, w, h)?;
         }
         Ok(out)
     }
 
     /// `fill`, taking no source patch that contains an `avoid` pixel: those stay as they are and
     /// still count in the patch distance of targets around them, but their texture is not copied.
+    /// With `disparity` (1 / depth per pixel, the hole's completed; 0 = unknown) a source pays
+    /// DEPTH_WEIGHT per squared log ratio of its disparity to the target's.
+    #[allow(clippy::too_many_arguments)]
     pub fn fill_avoiding(
         &self,
         image: &[f32],
         fill: &[bool],
         avoid: &[bool],
         labels: &[u8],
+        disparity: Option<&[f32]>,
         w: usize,
         h: usize,
     ) -> Result<Vec<f32>> {
@@ -257,6 +291,7 @@ impl ExemplarFill {
             hole: (0..cw * ch).map(|k| fill[at(k)]).collect(),
             avoid: (0..cw * ch).map(|k| avoid[at(k)]).collect(),
             labels: (0..cw * ch).map(|k| labels[at(k)]).collect(),
+            disparity: disparity.map_or(Vec::new(), |d| (0..cw * ch).map(|k| d[at(k)]).collect()),
         }];
         loop {
             let last = levels.last().unwrap();
@@ -345,6 +380,10 @@ impl ExemplarFill {
         let targets_b = Buffer::from_slice(gpu, "exemplar targets", &targets)?;
         let holes_b = Buffer::from_slice(gpu, "exemplar holes", &holes)?;
         let sources_b = Buffer::from_slice(gpu, "exemplar sources", sources)?;
+        let disparity = match level.disparity.is_empty() {
+            true => None,
+            false => Some(Buffer::from_slice(gpu, "exemplar disparity", &level.disparity)?),
+        };
         let push = |from: usize, list: &Buffer, count: usize, step: u32, seed: u32, scale: f32| ExemplarPush {
             image: image.address(),
             info: info_b.address(),
@@ -362,6 +401,9 @@ impl ExemplarFill {
             seed,
             radius: if coarsest { level.w.max(level.h) as u32 / 2 } else { FINER_RADIUS },
             label_penalty: scale,
+            depth_weight: if disparity.is_some() { DEPTH_WEIGHT } else { 0.0 },
+            pad: 0,
+            disparity: disparity.as_ref().map_or(0, |b| b.address()),
         };
         let mut rec = Recorder::new(gpu)?;
         let mut current = 0;

@@ -174,7 +174,9 @@ impl Completer {
                 let found_or_fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || t.found[p]).collect();
                 let avoid = leftover(holes[i], &found_or_fill);
                 let k = Intrinsics::from(&cameras[i]);
-                c.rgb = self.inpaint_again(i, &image, &rest, &avoid, (&c.surfaces, &c.planes, &k), w, h)?;
+                let disparity: Vec<f32> = c.depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect();
+                let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
+                c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
             }
             counts.push(n);
         }
@@ -236,7 +238,8 @@ impl Completer {
         let rgb = match &self.inpainter {
             Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
             Inpainter::Exemplar(e) => {
-                e.fill_rectified(v.rgb, &fill, &leftover(v.hole, &fill), &labels, &planes.planes, &v.intrinsics, w, h)?
+                let avoid = leftover(v.hole, &fill);
+                e.fill_rectified(v.rgb, &fill, &avoid, &labels, Some(&disparity), &planes.planes, &v.intrinsics, w, h)?
             }
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => rgb,
         };
@@ -274,8 +277,8 @@ impl Completer {
 
     /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more
     /// pixels known), keeping each surface's colors on that surface where the built-in inpainter
-    /// is used (`surfaces`: the labels, their planes and the view's intrinsics); `avoid` pixels
-    /// stay but lend the exemplar fill no texture.
+    /// is used (`guide`: the surface labels, the completed disparity, the planes and the view's
+    /// intrinsics); `avoid` pixels stay but lend the exemplar fill no texture.
     #[allow(clippy::too_many_arguments)]
     pub fn inpaint_again(
         &mut self,
@@ -283,13 +286,13 @@ impl Completer {
         image: &[f32],
         fill: &[bool],
         avoid: &[bool],
-        (labels, planes, k): (&[u8], &[Plane], &Intrinsics),
+        (labels, disparity, planes, k): (&[u8], &[f32], &[Plane], &Intrinsics),
         w: usize,
         h: usize,
     ) -> Result<Vec<f32>> {
         match &self.inpainter {
             Inpainter::Harmonic => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
-            Inpainter::Exemplar(e) => e.fill_rectified(image, fill, avoid, labels, planes, k, w, h),
+            Inpainter::Exemplar(e) => e.fill_rectified(image, fill, avoid, labels, Some(disparity), planes, k, w, h),
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => self.inpainter.inpaint_view(index, image, fill, w, h),
         }
     }
