@@ -330,3 +330,68 @@ fn fused_step_matches_the_passes_apart() {
     assert!(upper_moved > 1e-5, "resumed: the bands above degree 0 did not keep their momentum");
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }
+
+/// Per-pixel loss weights (`Trainer::set_loss_masks`, the removal's consensus weights): all ones
+/// train as no mask does, all zeros leave every parameter exactly where it was (zero gradient,
+/// zero moments: Adam's step is 0), a mask of the wrong size is refused.
+#[test]
+fn loss_masks_weigh_each_pixel() {
+    use cogeo::gpu::{DeviceChoice, Gpu};
+    use cogeo::rng::Rng;
+    use cogeo::scene::{Camera, GaussianScene};
+    use cogeo::train::dataset::{Dataset, View};
+    use cogeo::train::trainer::{TrainConfig, Trainer};
+    let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
+    let gpu = Gpu::new(&DeviceChoice { selector: None, validate, memory_limit_mib: None }).unwrap();
+    let mut rng = Rng::new(9);
+    let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
+    for _ in 0..200 {
+        scene.means.push([rng.range(-1.0, 1.0) as f32, rng.range(-0.8, 0.8) as f32, rng.range(-0.5, 0.5) as f32]);
+        scene.normals.push([0.0; 3]);
+        scene.log_scales.push([-2.5; 3]);
+        scene.quats.push([1.0, 0.0, 0.0, 0.0]);
+        scene.opacity_logits.push(0.0);
+        scene.sh.extend((0..3).map(|_| (0.5 * rng.normal()) as f32));
+    }
+    let camera = Camera::look_at("v", 40, 30, 60.0, [0.0, -0.2, -3.0], [0.0; 3], [0.0, -1.0, 0.0]);
+    let image: Vec<f32> = (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect();
+    let data = Dataset {
+        train: vec![View { camera, image, path: "t".into() }],
+        test: vec![],
+        points: vec![],
+        extent: 2.0,
+        warnings: vec![],
+        pose_check: None,
+    };
+    let step = |mask: Option<Vec<f32>>| {
+        let cfg = TrainConfig { iters: 10, densify: false, ..Default::default() };
+        let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
+        if let Some(m) = mask {
+            t.set_loss_masks(&[m]).unwrap();
+        }
+        for _ in 0..2 {
+            t.iterate(&data, false).unwrap();
+        }
+        t.download_scene().unwrap()
+    };
+    let largest_difference = |a: &GaussianScene, b: &GaussianScene| {
+        a.sh.iter()
+            .zip(&b.sh)
+            .chain(a.opacity_logits.iter().zip(&b.opacity_logits))
+            .fold(0f32, |m, (x, y)| m.max((x - y).abs()))
+    };
+    let (plain, ones, zeros) = (step(None), step(Some(vec![1.0; 1200])), step(Some(vec![0.0; 1200])));
+    let moved = largest_difference(&plain, &scene);
+    let (d_ones, d_zeros) = (largest_difference(&ones, &plain), largest_difference(&zeros, &scene));
+    println!(
+        "two steps moved SH / opacity by up to {moved}; all-ones mask vs none {d_ones}; all-zeros vs start {d_zeros}"
+    );
+    assert!(moved > 1e-3, "training did not move the scene ({moved})");
+    assert!(d_ones < 1e-5, "an all-ones mask trained differently from none ({d_ones})");
+    assert_eq!(zeros.sh, scene.sh, "an all-zeros mask moved SH");
+    assert_eq!(zeros.means, scene.means, "an all-zeros mask moved means");
+    let mut t = Trainer::new(&gpu, &data, &scene, TrainConfig::default()).unwrap();
+    let err = t.set_loss_masks(&[vec![1.0; 1199]]).unwrap_err().to_string();
+    assert!(err.contains("1199 weights for an image of 1200 pixels"), "{err}");
+    assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
+}

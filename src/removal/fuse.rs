@@ -39,6 +39,9 @@ pub struct Patched {
     pub pruned: usize,
     /// The pruning criteria used, when pruning ran.
     pub prune: Option<PruneConfig>,
+    /// Per view (`Fill::Depth`), the pixels whose back-projected point was kept: the surface
+    /// points the view owns in the patch. Empty for the nearest-copy fill.
+    pub owned: Vec<Vec<bool>>,
 }
 
 /// Stage 4: adds new Gaussians behind the removed objects to `background`. `Fill::Depth`
@@ -60,9 +63,9 @@ pub fn patch_scene(
         let patch = nearest_copies(&scene, removed_means);
         scene.append(&patch)?;
         let report = serde_json::json!({ "fill": "nearest-copy", "patch_gaussians": patch.len() });
-        return Ok(Patched { scene, report, pruned: 0, prune: None });
+        return Ok(Patched { scene, report, pruned: 0, prune: None, owned: Vec::new() });
     }
-    let (points, stats) = fuse_points(views, cfg);
+    let (points, stats, owned) = fuse_points(views, cfg);
     let patch = patch_gaussians(&points, scene.sh_degree, cfg.opacity);
     let (mut pruned, mut prune_used) = (0, None);
     if prune && !patch.is_empty() {
@@ -80,7 +83,7 @@ pub fn patch_scene(
     }
     scene.append(&patch)?;
     let report = serde_json::json!({ "stats": stats, "patch_gaussians": patch.len() });
-    Ok(Patched { scene, report, pruned, prune: prune_used })
+    Ok(Patched { scene, report, pruned, prune: prune_used, owned })
 }
 
 /// One edited view's completion.
@@ -157,8 +160,9 @@ fn owns(o: &FuseView, kept: &[bool], stride: usize, p: [f64; 3], tolerance: f32)
     o.fill[q] && kept[sampled] && (z - o.depth[q] as f64).abs() <= o.depth[q] as f64 * tolerance as f64
 }
 
-/// Back-projects, checks consistency across views and merges.
-pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, FuseStats) {
+/// Back-projects, checks consistency across views and merges. Also returns, per view, the pixels
+/// whose point was kept.
+pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, FuseStats, Vec<Vec<bool>>) {
     let mut stats = FuseStats::default();
     let stride = cfg.stride.max(1);
     let mut points = Vec::new();
@@ -200,7 +204,7 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
         }
     }
     if points.is_empty() {
-        return (points, stats);
+        return (points, stats, kept);
     }
     let mut fp: Vec<f64> = points.iter().map(|p| p.footprint).collect();
     fp.sort_by(|a, b| a.total_cmp(b));
@@ -235,7 +239,7 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
         })
         .collect();
     stats.merged_into = merged.len();
-    (merged, stats)
+    (merged, stats, kept)
 }
 
 /// The patch as Gaussians: isotropic scale of the footprint, identity rotation, high opacity, the
@@ -343,7 +347,7 @@ mod tests {
             FuseView { camera: &a, rgb: &red, depth: &depth, fill: &fill_a },
             FuseView { camera: &b, rgb: &blue, depth: &depth, fill: &fill_b },
         ];
-        let (points, stats) = fuse_points(&views, &FuseConfig { one_owner, ..Default::default() });
+        let (points, stats, _) = fuse_points(&views, &FuseConfig { one_owner, ..Default::default() });
         assert_eq!(stats.inconsistent, 0, "both views complete the same plane");
         let is = |p: &PatchPoint, c: [f32; 3]| p.rgb == c;
         let red_n = points.iter().filter(|p| is(p, [1.0, 0.0, 0.0])).count();
@@ -388,7 +392,7 @@ mod tests {
             FuseView { camera: &b, rgb: &blue, depth: &zb, fill: &fill_ab },
             FuseView { camera: &c, rgb: &green, depth: &zc, fill: &fill_c },
         ];
-        let (points, stats) = fuse_points(&views, &FuseConfig::default());
+        let (points, stats, _) = fuse_points(&views, &FuseConfig::default());
         let count = |c: [f32; 3]| points.iter().filter(|p| p.rgb == c).count();
         let (r, bl, g) = (count([1.0, 0.0, 0.0]), count([0.0, 0.0, 1.0]), count([0.0, 1.0, 0.0]));
         println!("{stats:?}: red {r}, blue {bl}, green {g}");

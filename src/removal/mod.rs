@@ -18,6 +18,7 @@
 
 pub mod select;
 pub mod complete;
+pub mod consensus;
 pub mod fuse;
 pub mod refine;
 
@@ -29,6 +30,7 @@ use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
 use complete::transfer::SourceView;
 use complete::{Completed, Completer, ViewInputs};
+use consensus::ConsensusView;
 use fuse::{FuseConfig, FuseView, PruneConfig};
 use refine::{RefineConfig, RefineReport};
 use select::{HoleConfig, MaskedView, ViewRenderer};
@@ -156,6 +158,8 @@ pub fn remove(
     clock.lap("masks");
     let mut result = selection.background; // moved: only the removed mask and count are used below
     let mut completed: Vec<Completed> = Vec::new();
+    // per view, the hole pixels that took a photo's color (stage 3c)
+    let mut transferred: Vec<Vec<bool>> = Vec::new();
     let mut per_view = Vec::new();
     let (mut fusion, mut pruned, mut prune_used) = (None, 0, None);
     let mut refine_report: Option<RefineReport> = None;
@@ -189,9 +193,9 @@ pub fn remove(
             }
             if opts.stages.transfer {
                 let fills: Vec<&[bool]> = masked.iter().map(|m| m.fill.as_slice()).collect();
-                let moved = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
-                for (r, n) in per_view.iter_mut().zip(moved) {
-                    r["transferred_pixels"] = n.into();
+                transferred = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
+                for (r, t) in per_view.iter_mut().zip(&transferred) {
+                    r["transferred_pixels"] = t.iter().filter(|&&f| f).count().into();
                 }
                 clock.lap("transfer");
             }
@@ -209,13 +213,35 @@ pub fn remove(
         let patch = fuse::patch_scene(result, fill, &fviews, &removed_means, &opts.fuse, prune, opts.prune.clone())?;
         (result, fusion, pruned, prune_used) = (patch.scene, Some(patch.report), patch.pruned, patch.prune);
         clock.lap("fuse");
+        // 4b. which invented pixels each view's refinement keeps
+        let masks = if opts.stages.refine && !patch.owned.is_empty() {
+            let views: Vec<ConsensusView> = (0..completed.len())
+                .map(|i| ConsensusView {
+                    camera: &cameras[i],
+                    rgb: &completed[i].rgb,
+                    depth: &completed[i].depth,
+                    invented: (0..masked[i].fill.len())
+                        .map(|p| masked[i].fill[p] && !transferred.get(i).is_some_and(|t| t[p]))
+                        .collect(),
+                    owned: &patch.owned[i],
+                })
+                .collect();
+            let (masks, verdicts) = consensus::loss_masks(&views, opts.fuse.tolerance);
+            for (r, v) in per_view.iter_mut().zip(verdicts) {
+                r["consensus"] = serde_json::to_value(v)?;
+            }
+            Some(masks)
+        } else {
+            None
+        };
         // 5. refinement
         if opts.stages.refine {
             let targets: Vec<Vec<f32>> = completed.iter().map(|k| k.rgb.clone()).collect();
             let total = opts.refine.iters as usize;
-            let (refined, report) = refine::refine(gpu, &result, cameras, targets, extent, &opts.refine, |it| {
-                progress("refine", it as usize, total)
-            })?;
+            let (refined, report) =
+                refine::refine(gpu, &result, cameras, targets, masks.as_deref(), extent, &opts.refine, |it| {
+                    progress("refine", it as usize, total)
+                })?;
             result = refined;
             refine_report = Some(report);
             clock.lap("refine");

@@ -52,13 +52,15 @@ pub struct RefineReport {
     pub psnr_after: f64,
 }
 
-/// Refines `scene` towards `targets` (planar RGB per camera). `extent` scales the position learning
-/// rate as in training.
+/// Refines `scene` towards `targets` (planar RGB per camera), each pixel's loss weighted by
+/// `masks` where given (consensus.rs). `extent` scales the position learning rate as in training.
+#[allow(clippy::too_many_arguments)]
 pub fn refine(
     gpu: &Gpu,
     scene: &GaussianScene,
     cameras: &[Camera],
     targets: Vec<Vec<f32>>,
+    masks: Option<&[Vec<f32>]>,
     extent: f64,
     cfg: &RefineConfig,
     mut progress: impl FnMut(u32),
@@ -80,6 +82,9 @@ pub fn refine(
     };
     let mut t = Trainer::new(gpu, &data, scene, tcfg)?;
     t.full_sh = true;
+    if let Some(m) = masks {
+        t.set_loss_masks(m)?;
+    }
     let psnr_before = t.evaluate(&data.train)?.psnr;
     let frozen_iters = ((cfg.iters as f32) * cfg.frozen_fraction.clamp(0.0, 1.0)).round() as u32;
     while t.step < cfg.iters {

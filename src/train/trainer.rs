@@ -181,6 +181,9 @@ pub struct Trainer {
     /// Every training image, planar RGB, one after another.
     targets: Buffer,
     target_offsets: Vec<u64>,
+    /// Per-pixel loss weights of every training view (`set_loss_masks`), laid out as the targets,
+    /// and each view's weight sum.
+    loss_masks: Option<(Buffer, Vec<f64>)>,
     pub step: u32,
     rng: Rng,
     order: Vec<usize>,
@@ -233,6 +236,7 @@ impl Trainer {
             adam: Adam::new(gpu)?,
             targets: Buffer::from_slice(gpu, "training images", &all)?,
             target_offsets,
+            loss_masks: None,
             step: 0,
             rng: Rng::new(cfg.seed),
             order: Vec::new(),
@@ -254,6 +258,31 @@ impl Trainer {
 
     pub fn num_gaussians(&self) -> u32 {
         self.scene.num_gaussians
+    }
+
+    /// Weights each training view's loss per pixel (width x height per view, in the dataset's
+    /// order; 0 = the pixel does not count): the loss becomes the weighted mean.
+    pub fn set_loss_masks(&mut self, masks: &[Vec<f32>]) -> Result<()> {
+        if masks.len() != self.target_offsets.len() {
+            anyhow::bail!("{} loss masks for {} training views", masks.len(), self.target_offsets.len());
+        }
+        let mut all = vec![0f32; self.targets.size() as usize / 4];
+        let mut sums = Vec::with_capacity(masks.len());
+        for (i, (m, &offset)) in masks.iter().zip(&self.target_offsets).enumerate() {
+            let end = self.target_offsets.get(i + 1).map_or(all.len(), |&o| o as usize);
+            if 3 * m.len() != end - offset as usize {
+                anyhow::bail!(
+                    "loss mask {i}: {} weights for an image of {} pixels",
+                    m.len(),
+                    (end - offset as usize) / 3
+                );
+            }
+            // the targets are planar RGB: a view's mask is its first plane's span
+            all[offset as usize..offset as usize + m.len()].copy_from_slice(m);
+            sums.push(m.iter().map(|&w| w as f64).sum());
+        }
+        self.loss_masks = Some((Buffer::from_slice(&self.gpu, "loss masks", &all)?, sums));
+        Ok(())
     }
 
     fn position_lr(&self) -> f32 {
@@ -308,7 +337,7 @@ impl Trainer {
             render: outputs.rgb,
             target: &self.targets,
             target_offset: self.target_offsets[vi],
-            mask: None,
+            mask: self.loss_masks.as_ref().map(|(b, sums)| (b, self.target_offsets[vi], sums[vi])),
         };
         self.loss.record(&mut rec, view.camera.width, view.camera.height, &inputs)?;
         let upstream =

@@ -144,8 +144,8 @@ impl Completer {
     /// Stage 3c, depth-guided color transfer over the whole `hole` of every view (covered pixels
     /// render background that few views constrained): pixels whose completed surface point another
     /// view saw take that view's captured color (`sources`, one per view), and what no view saw
-    /// of `fill` is inpainted again, now from the transferred colors too. Returns the number of
-    /// transferred pixels per view.
+    /// of `fill` is inpainted again, now from the transferred colors too. Returns, per view, the
+    /// transferred pixels.
     pub fn transfer_colors(
         &mut self,
         cameras: &[Camera],
@@ -153,11 +153,11 @@ impl Completer {
         holes: &[&[bool]],
         fills: &[&[bool]],
         completed: &mut [Completed],
-    ) -> Result<Vec<usize>> {
+    ) -> Result<Vec<Vec<bool>>> {
         let found: Vec<Transfer> = (0..completed.len())
             .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE))
             .collect();
-        let mut counts = Vec::with_capacity(found.len());
+        let mut transferred = Vec::with_capacity(found.len());
         for (i, t) in found.into_iter().enumerate() {
             let (w, h) = (cameras[i].width as usize, cameras[i].height as usize);
             let c = &mut completed[i];
@@ -178,9 +178,9 @@ impl Completer {
                 let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
                 c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
             }
-            counts.push(n);
+            transferred.push(t.found);
         }
-        Ok(counts)
+        Ok(transferred)
     }
 
     pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {
