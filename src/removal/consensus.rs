@@ -63,9 +63,8 @@ pub fn loss_masks(views: &[ConsensusView], tolerance: f32) -> (Vec<Vec<f32>>, Ve
 
 /// The color of `o` where it invented the surface point `world`, if it did.
 fn invention_at(o: &ConsensusView, world: [f64; 3], tolerance: f32) -> Option<[f32; 3]> {
-    let (x, y, z) = o.camera.project_to_image(world)?;
-    let (w, hw) = (o.camera.width as usize, o.invented.len());
-    let q = y as usize * w + x as usize;
+    let (q, z) = o.camera.pixel_of(world)?;
+    let hw = o.invented.len();
     let d = o.depth[q] as f64;
     (o.invented[q] && d > 0.0 && (z - d).abs() <= d * tolerance as f64).then(|| [0, 1, 2].map(|c| o.rgb[c * hw + q]))
 }

@@ -135,12 +135,6 @@ pub struct FuseStats {
     pub merged_into: usize,
 }
 
-/// Where `p` lands in `o`: (pixel index, camera z), or None outside its image or behind it.
-fn land(o: &FuseView, p: [f64; 3]) -> Option<(usize, f64)> {
-    let (x, y, z) = o.camera.project_to_image(p)?;
-    Some((y as usize * o.camera.width as usize + x as usize, z))
-}
-
 /// Views by fill size, largest first (ties by index).
 fn owner_order(views: &[FuseView]) -> Vec<usize> {
     let mut order: Vec<usize> = (0..views.len()).collect();
@@ -153,10 +147,10 @@ fn owner_order(views: &[FuseView]) -> Vec<usize> {
 /// there was dropped as inconsistent owns nothing: counting it left holes in the patch where
 /// neither view's point survived (the background showed through as dark specks).
 fn owns(o: &FuseView, kept: &[bool], stride: usize, p: [f64; 3], tolerance: f32) -> bool {
-    let Some((x, y, z)) = o.camera.project_to_image(p) else { return false };
+    let Some((q, z)) = o.camera.pixel_of(p) else { return false };
     let w = o.camera.width as usize;
-    let q = y as usize * w + x as usize;
-    let sampled = (y as usize - y as usize % stride) * w + (x as usize - x as usize % stride);
+    let (x, y) = (q % w, q / w);
+    let sampled = (y - y % stride) * w + (x - x % stride);
     o.fill[q] && kept[sampled] && (z - o.depth[q] as f64).abs() <= o.depth[q] as f64 * tolerance as f64
 }
 
@@ -184,7 +178,8 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
                 let p = v.camera.pixel_point(x, y, z);
                 let floats = views.iter().enumerate().any(|(vj, o)| {
                     vj != vi
-                        && land(o, p)
+                        && o.camera
+                            .pixel_of(p)
                             .is_some_and(|(q, z)| o.fill[q] && z < o.depth[q] as f64 * (1.0 - cfg.tolerance as f64))
                 });
                 if floats {

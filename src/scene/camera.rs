@@ -103,6 +103,13 @@ impl Camera {
         (x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64).then_some((x, y, pc[2]))
     }
 
+    /// The pixel `p` lands in: its row-major index and the view depth; None when it is behind
+    /// the camera or outside the image.
+    pub fn pixel_of(&self, p: [f64; 3]) -> Option<(usize, f64)> {
+        let (x, y, z) = self.project_to_image(p)?;
+        Some((y as usize * self.width as usize + x as usize, z))
+    }
+
     /// tan of half the field of view along x and y.
     pub fn tan_half_fov(&self) -> (f64, f64) {
         (0.5 * self.width as f64 / self.fx, 0.5 * self.height as f64 / self.fy)

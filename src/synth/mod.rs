@@ -259,8 +259,7 @@ fn never_seen(points: &[V3], cameras: &[Camera], train: &[usize], with_objects: 
         .map(|&point| {
             let seen = train.iter().any(|&t| {
                 let tc = &cameras[t];
-                let Some((u, vv, z)) = tc.project_to_image(point) else { return false };
-                let q = vv as usize * tc.width as usize + u as usize;
+                let Some((q, z)) = tc.pixel_of(point) else { return false };
                 (with_objects[t].depth[q] as f64 - z).abs() <= 0.02 * z
             });
             if seen {
