@@ -45,9 +45,18 @@ pub struct ViewConsensus {
 /// The loss weights of every view (1, or 0 at the invented pixels a disagreeing view does not own)
 /// and what was measured.
 pub fn loss_masks(views: &[ConsensusView], tolerance: f32) -> (Vec<Vec<f32>>, Vec<ViewConsensus>) {
-    let verdicts: Vec<ViewConsensus> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..views.len()).map(|v| s.spawn(move || judge(views, v, tolerance))).collect();
-        handles.into_iter().map(|h| h.join().expect("consensus thread")).collect()
+    // the views are independent: a chunk of them per core
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(views.len().max(1));
+    let per = views.len().div_ceil(threads).max(1);
+    let mut verdicts = vec![ViewConsensus { deviation: None, left_out: false }; views.len()];
+    std::thread::scope(|scope| {
+        for (t, out) in verdicts.chunks_mut(per).enumerate() {
+            scope.spawn(move || {
+                for (k, verdict) in out.iter_mut().enumerate() {
+                    *verdict = judge(views, t * per + k, tolerance);
+                }
+            });
+        }
     });
     let masks = views
         .iter()
