@@ -9,6 +9,9 @@
 //! parsers), `onnx` (user-supplied
 //! models), `rng` (seeded random numbers). The command line lives in the binary (src/cli).
 
+// Per-channel and per-row index loops read as the formulas they implement (c[ch] += w * color[ch]).
+#![allow(clippy::needless_range_loop)]
+
 pub mod eval;
 pub mod flag_values;
 pub mod gpu;

@@ -82,7 +82,7 @@ fn render_writes_png_depth_and_alpha_that_match_the_reference() {
     assert!(off <= 3, "{off} PNG samples differ from the reference by more than one level");
     let (w, h, depth) = cogeo::io::read_exr_channel(&out.join("a_depth.exr"), None).unwrap();
     assert_eq!((w, h), (70, 45));
-    let i = (0..hw).filter(|&i| !reference.ambiguous[i] && reference.alpha[i] > 0.5).next().unwrap();
+    let i = (0..hw).find(|&i| !reference.ambiguous[i] && reference.alpha[i] > 0.5).unwrap();
     assert!((depth[i] as f64 - reference.expected_depth[i]).abs() <= 1e-4 * reference.expected_depth[i]);
     // no temporary files left behind
     assert!(std::fs::read_dir(&out).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));

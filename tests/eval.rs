@@ -322,7 +322,7 @@ fn eval_cli_on_a_synth_dataset() {
 
     // a render without a mask is an error that names the folder and the view
     std::fs::create_dir_all(root.join("extra")).unwrap();
-    std::fs::copy(format!("{gt}/{}.png", cam.name), root.join(format!("extra/nomask.png"))).unwrap();
+    std::fs::copy(format!("{gt}/{}.png", cam.name), root.join("extra/nomask.png")).unwrap();
     let out = std::process::Command::new(exe)
         .args([
             "eval",

@@ -138,6 +138,6 @@ fn tag_with_prompts_end_to_end() {
     assert_eq!(sidecar["prompts"]["views_detected"][0].as_u64().unwrap(), ds.train.len() as u64);
     let tagged_scene = cogeo::scene::ply::read_ply(std::path::Path::new(&tagged)).unwrap();
     let labels = cogeo::tag::scene_labels(&tagged_scene).unwrap();
-    assert!(labels.iter().any(|&l| l == 1), "no Gaussian took the prompt's label");
+    assert!(labels.contains(&1), "no Gaussian took the prompt's label");
     std::fs::remove_dir_all(&root).ok();
 }

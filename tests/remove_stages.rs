@@ -333,8 +333,8 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
         // away from the source's border, where bilinear lookups clamp, the color is exact
         if t.found[p] && x > 1.0 && x < w as f64 - 1.0 && y > 1.0 && y < h as f64 - 1.0 {
             let c = color(pt);
-            for k in 0..3 {
-                assert!((t.rgb[k * w * h + p] as f64 - c[k]).abs() < 1e-5, "pixel {p} channel {k}");
+            for (k, &ck) in c.iter().enumerate() {
+                assert!((t.rgb[k * w * h + p] as f64 - ck).abs() < 1e-5, "pixel {p} channel {k}");
             }
             found += 1;
         }

@@ -144,8 +144,8 @@ fn everything_behind_the_camera_renders_background() {
         .unwrap();
     assert_eq!(out.num_intersections, 0);
     let hw = 40 * 30;
-    for c in 0..3 {
-        assert!(out.rgb[c * hw..(c + 1) * hw].iter().all(|&v| v == bg[c]));
+    for (c, &b) in bg.iter().enumerate() {
+        assert!(out.rgb[c * hw..(c + 1) * hw].iter().all(|&v| v == b));
     }
     assert!(out.alpha.iter().all(|&a| a == 0.0));
 }

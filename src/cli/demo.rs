@@ -183,7 +183,7 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
         let (w, h, strip) = hstack_rgb8(&refs, width as usize, height as usize);
         cogeo::io::write_png(&out.join(format!("strips/{name}.png")), w, h, image::ColorType::Rgb8, &strip)?;
         if sheet_h > 0 {
-            sheet.extend(std::iter::repeat(255u8).take(w as usize * 2 * 3));
+            sheet.extend(std::iter::repeat_n(255u8, w as usize * 2 * 3));
             sheet_h += 2;
         }
         sheet.extend_from_slice(&strip);

@@ -69,6 +69,7 @@ pub struct RenderArgs {
 }
 
 /// Renders every camera and writes the requested files into `out`.
+#[allow(clippy::too_many_arguments)]
 fn render_views(
     gpu: &Gpu,
     scene: &GaussianScene,
@@ -144,7 +145,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if a.features && scene.feature_matrix("f_obj_").is_none() {
         bail!("{}: --features needs f_obj_* properties in the scene (run `cogeo tag` first)", scene_path.display());
     }
-    if !(a.near > 0.0) {
+    if a.near.is_nan() || a.near <= 0.0 {
         bail!("--near must be positive");
     }
     let labels = if a.labels {

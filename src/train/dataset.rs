@@ -51,7 +51,7 @@ pub fn load_rgb(path: &Path) -> Result<(u32, u32, Vec<f32>)> {
 
 /// Is view `index` (in name order) a held-out test view?
 pub fn is_test_view(index: usize) -> bool {
-    index % 8 == 0
+    index.is_multiple_of(8)
 }
 
 /// Checks the model's poses against up to 8 of its images in `image_dir` (scene/pose_check.rs).

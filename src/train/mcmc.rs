@@ -212,7 +212,7 @@ pub fn relocate_and_grow(
     let n = scene.len();
     let mut keep: Vec<Option<usize>> = (0..n).map(Some).collect();
     let opacity: Vec<f64> = scene.opacity_logits.iter().map(|&l| sigmoid(l)).collect();
-    let dead: Vec<usize> = (0..n).filter(|&i| !(opacity[i] > MIN_OPACITY)).collect();
+    let dead: Vec<usize> = (0..n).filter(|&i| opacity[i].is_nan() || opacity[i] <= MIN_OPACITY).collect();
     let alive_weight: Vec<f64> = opacity.iter().map(|&o| if o > MIN_OPACITY { o } else { 0.0 }).collect();
     if dead.len() == n {
         bail!("every Gaussian is transparent (opacity <= {MIN_OPACITY}); nothing to relocate onto");
@@ -298,7 +298,7 @@ mod tests {
             assert!(o > MIN_OPACITY, "Gaussian {i} still dead ({o})");
             // every Gaussian sits on a live source: its mean and color are those of a live original
             let src = out.sh[3 * i] as usize;
-            assert!(src % 4 != 0, "Gaussian {i} copies dead source {src}");
+            assert!(!src.is_multiple_of(4), "Gaussian {i} copies dead source {src}");
             assert_eq!(out.means[i], [src as f32, 0.0, 0.0]);
             if i < 100 && i % 4 != 0 {
                 assert_eq!(src, i, "a live Gaussian was overwritten");

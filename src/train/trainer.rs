@@ -373,13 +373,13 @@ impl Trainer {
             self.last_loss = Some((loss, l1));
         }
         if self.cfg.densify && self.step <= self.cfg.densify_until {
-            if self.step >= self.cfg.densify_from && self.step % self.cfg.densify_interval == 0 {
+            if self.step >= self.cfg.densify_from && self.step.is_multiple_of(self.cfg.densify_interval) {
                 match self.cfg.strategy {
                     Strategy::Adc => self.densify()?,
                     Strategy::Mcmc => self.relocate()?,
                 }
             }
-            if self.cfg.strategy == Strategy::Adc && self.step % self.cfg.opacity_reset_interval == 0 {
+            if self.cfg.strategy == Strategy::Adc && self.step.is_multiple_of(self.cfg.opacity_reset_interval) {
                 self.reset_opacity()?;
             }
         }
