@@ -43,6 +43,9 @@ fn check_loss(width: usize, height: usize, masked: bool, seed: u64, run: u32) {
         target_offset: (3 * hw) as u64,
         mask: masked.then_some((&mask_buf, 0, mask_sum)),
     };
+    // widths that are a multiple of 4 take the vec4 passes wherever the run is one too
+    let vectorized = loss.vectorized(width as u32, height as u32, &inputs).unwrap();
+    assert_eq!(vectorized, width.is_multiple_of(4) && run.is_multiple_of(4), "{width}x{height}, run {run}");
     loss.record(&mut rec, width as u32, height as u32, &inputs).unwrap();
     rec.submit_and_wait().unwrap();
     let (value, l1, ssim) = loss.read_values().unwrap();
@@ -55,7 +58,7 @@ fn check_loss(width: usize, height: usize, masked: bool, seed: u64, run: u32) {
     let ref_ssim = reference::ssim(&x, &y, width, height, mref);
     let ref_l1 = reference::l1(&x, &y, width, height, mref);
     let ref_loss = reference::loss(&x, &y, width, height, mref, 0.2);
-    println!("{width}x{height} masked={masked}: SSIM gpu {ssim:.7} cpu {ref_ssim:.7}; L1 gpu {l1:.7} cpu {ref_l1:.7}");
+    println!("{width}x{height} masked={masked} run={run} vec4={vectorized}: SSIM gpu {ssim:.7} cpu {ref_ssim:.7}; L1 gpu {l1:.7} cpu {ref_l1:.7}");
     assert!(ref_ssim > 0.2 && ref_ssim < 0.9, "SSIM {ref_ssim} should be far from 0 and 1");
     assert!((ssim - ref_ssim).abs() < 1e-5);
     assert!((l1 - ref_l1).abs() < 1e-6);
@@ -86,10 +89,13 @@ fn check_loss(width: usize, height: usize, masked: bool, seed: u64, run: u32) {
 #[test]
 fn loss_value_and_gradient_match_cpu() {
     // one output per invocation, and runs of 8, 16 and 32 along the blurred axis (GPU and CPU devices),
-    // on sizes that are no multiple of a run
+    // on sizes that are no multiple of a run; widths 28 and 36 take the vec4 passes (blur along y,
+    // gradient along x) for runs of 8 and more
     for run in [1, 8, 16, 32] {
         check_loss(23, 19, false, 1, run);
         check_loss(30, 17, true, 2, run);
+        check_loss(28, 19, false, 3, run);
+        check_loss(36, 17, true, 4, run);
     }
 }
 

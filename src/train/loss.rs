@@ -2,7 +2,9 @@
 //! window (sigma 1.5, zero padding) as in the INRIA reference, optional per-pixel mask, and its
 //! gradient with respect to the rendered image, in four passes over a 2D grid (ssim_stats_x.comp,
 //! ssim_terms_y.comp, blur.comp, loss_grad.comp: each blur direction fused with what comes before or
-//! after it). `reference` has the f64 CPU twin the tests compare against.
+//! after it). Where rows are 16-byte aligned the last two run the other way round (blur_y.comp,
+//! loss_grad_x.comp), so that both passes along x move vec4s. `reference` has the f64 CPU twin the
+//! tests compare against.
 
 use crate::gpu::{Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
@@ -21,7 +23,8 @@ struct StatsPush {
     width: u32,
     height: u32,
     channels: u32,
-    pad: u32,
+    /// Rows 16-byte aligned: vec4 loads and stores (ssim_window.glsl).
+    aligned: u32,
 }
 
 #[repr(C)]
@@ -53,7 +56,8 @@ struct BlurPush {
 struct GradPush {
     render: u64,
     target: u64,
-    terms_x: u64,
+    /// The partials blurred along one axis (x for loss_grad.comp, y for loss_grad_x.comp).
+    terms: u64,
     dl_dx: u64,
     l1_map: u64,
     mask: u64,
@@ -115,6 +119,8 @@ pub struct PhotometricLoss {
     terms_y: ComputePipeline,
     blur: ComputePipeline,
     grad: ComputePipeline,
+    blur_y: ComputePipeline,
+    grad_x: ComputePipeline,
     scratch: Option<Scratch>,
     /// Outputs per invocation along the blurred axis.
     run: u32,
@@ -138,6 +144,8 @@ impl PhotometricLoss {
             stats_x: pass("ssim_stats_x", shaders::SSIM_STATS_X)?,
             terms_y: pass("ssim_terms_y", shaders::SSIM_TERMS_Y)?,
             blur: pass("blur", shaders::BLUR)?,
+            blur_y: pass("blur_y", shaders::BLUR_Y)?,
+            grad_x: pass("loss_grad_x", shaders::LOSS_GRAD_X)?,
             grad: pass("loss_grad", shaders::LOSS_GRAD)?,
             scratch: None,
             lambda: SSIM_LAMBDA,
@@ -162,9 +170,21 @@ impl PhotometricLoss {
         Ok(())
     }
 
+    /// Whether `record` moves vec4s for an image `width` wide with these inputs: every row and
+    /// buffer 16-byte aligned (width a multiple of 4; the target and mask offsets too).
+    pub fn vectorized(&mut self, width: u32, height: u32, inputs: &LossInputs) -> Result<bool> {
+        self.reserve(width, height)?;
+        let s = self.scratch.as_ref().unwrap();
+        let target = inputs.target.address() + inputs.target_offset * 4;
+        let mask = inputs.mask.map_or(0, |(b, offset, _)| b.address() + offset * 4);
+        let scratch = [s.a.address(), s.b.address(), s.ssim_map.address(), s.l1_map.address(), s.dl_drgb.address()];
+        let addresses = [inputs.render.address(), target, mask].into_iter().chain(scratch);
+        Ok(width.is_multiple_of(4) && self.run.is_multiple_of(4) && addresses.into_iter().all(|a| a.is_multiple_of(16)))
+    }
+
     /// Records the loss gradient into `dl_drgb()` and the weighted per-pixel SSIM and L1 maps.
     pub fn record(&mut self, rec: &mut Recorder, width: u32, height: u32, inputs: &LossInputs) -> Result<()> {
-        self.reserve(width, height)?;
+        let aligned = self.vectorized(width, height, inputs)?;
         let s = self.scratch.as_ref().unwrap();
         let hw = width * height;
         let n = hw * CHANNELS;
@@ -176,7 +196,8 @@ impl PhotometricLoss {
         let inv = (1.0 / weight_sum.max(1.0)) as f32;
         let (render, channels) = (inputs.render.address(), CHANNELS);
         // 1. x, y, x^2, y^2, xy blurred along x -> a
-        let stats = StatsPush { render, target, stats: s.a.address(), width, height, channels, pad: 0 };
+        let stats =
+            StatsPush { render, target, stats: s.a.address(), width, height, channels, aligned: aligned as u32 };
         rec.dispatch(&self.stats_x, &stats, grid_runs_along_x(self.run, width, height, CHANNELS));
         // 2. blurred along y; SSIM and its weighted partials -> b, the SSIM map
         let terms = TermsPush {
@@ -192,14 +213,18 @@ impl PhotometricLoss {
             pad: 0,
         };
         rec.dispatch(&self.terms_y, &terms, grid_runs_along_y(self.run, width, height, CHANNELS));
-        // 3. the partials blurred along x -> a
+        // 3. the partials blurred along x (along y where aligned) -> a
         let blur = BlurPush { src: s.b.address(), dst: s.a.address(), width, height };
-        rec.dispatch(&self.blur, &blur, grid_runs_along_x(self.run, width, height, 3 * CHANNELS));
-        // 4. along y, combined with L1 into dL/dx, and the L1 map
+        if aligned {
+            rec.dispatch(&self.blur_y, &blur, grid_runs_along_y(self.run, width, height, 3 * CHANNELS));
+        } else {
+            rec.dispatch(&self.blur, &blur, grid_runs_along_x(self.run, width, height, 3 * CHANNELS));
+        }
+        // 4. along the other axis, combined with L1 into dL/dx, and the L1 map
         let grad = GradPush {
             render,
             target,
-            terms_x: s.a.address(),
+            terms: s.a.address(),
             dl_dx: s.dl_drgb.address(),
             l1_map: s.l1_map.address(),
             mask,
@@ -210,7 +235,11 @@ impl PhotometricLoss {
             lambda: self.lambda,
             has_mask,
         };
-        rec.dispatch(&self.grad, &grad, grid_runs_along_y(self.run, width, height, CHANNELS));
+        if aligned {
+            rec.dispatch(&self.grad_x, &grad, grid_runs_along_x(self.run, width, height, CHANNELS));
+        } else {
+            rec.dispatch(&self.grad, &grad, grid_runs_along_y(self.run, width, height, CHANNELS));
+        }
         rec.mark_moved("loss", Self::bytes_moved(hw, inputs.mask.is_some()));
         Ok(())
     }

@@ -16,3 +16,11 @@ const int SPAN = RUN + 10;
 // columns wide, so each row of a run is one contiguous 64-float read.
 #define RUNS_ALONG_X layout(local_size_x = 8, local_size_y = 8) in
 #define RUNS_ALONG_Y layout(local_size_x = 64, local_size_y = 1) in
+
+// Where the rows are 16-byte aligned (width a multiple of 4, every buffer 16-byte aligned:
+// `PhotometricLoss::vectorized`), the passes along x move vec4s: on lavapipe a vec4 per lane costs
+// about what a float did (the partials' blur along x went from 13.7 to 7.5 ms at 512x512). Along
+// y the lanes already read consecutive floats, and vec4s of 4 columns measured 1.5x slower there.
+// So there the partials are blurred along y first (blur_y.comp) and the gradient pass runs along x
+// (loss_grad_x.comp). Runs are multiples of 4 outputs in the vec4 passes.
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4s { vec4 v[]; };
