@@ -2,9 +2,9 @@
 //! window (sigma 1.5, zero padding) as in the INRIA reference, optional per-pixel mask, and its
 //! gradient with respect to the rendered image, in four passes over a 2D grid (ssim_stats_x.comp,
 //! ssim_terms_y.comp, blur.comp, loss_grad.comp: each blur direction fused with what comes before or
-//! after it). Where rows are 16-byte aligned the last two run the other way round (blur_y.comp,
-//! loss_grad_x.comp), so that both passes along x move vec4s. `reference` has the f64 CPU twin the
-//! tests compare against.
+//! after it). Where rows are 16-byte aligned every pass runs along the other axis
+//! (ssim_stats_y.comp, ssim_terms_x.comp, blur_y.comp, loss_grad_x.comp), so that the two heavy
+//! ones, along x, move vec4s. `reference` has the f64 CPU twin the tests compare against.
 
 use crate::gpu::{Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
@@ -23,8 +23,7 @@ struct StatsPush {
     width: u32,
     height: u32,
     channels: u32,
-    /// Rows 16-byte aligned: vec4 loads and stores (ssim_window.glsl).
-    aligned: u32,
+    pad: u32,
 }
 
 #[repr(C)]
@@ -49,6 +48,18 @@ struct BlurPush {
     dst: u64,
     width: u32,
     height: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct BlurYPush {
+    src: u64,
+    dst: u64,
+    width: u32,
+    height: u32,
+    /// Floats between the three partials' planes.
+    plane_stride: u32,
+    pad: u32,
 }
 
 #[repr(C)]
@@ -119,6 +130,8 @@ pub struct PhotometricLoss {
     terms_y: ComputePipeline,
     blur: ComputePipeline,
     grad: ComputePipeline,
+    stats_y: ComputePipeline,
+    terms_x: ComputePipeline,
     blur_y: ComputePipeline,
     grad_x: ComputePipeline,
     scratch: Option<Scratch>,
@@ -144,6 +157,8 @@ impl PhotometricLoss {
             stats_x: pass("ssim_stats_x", shaders::SSIM_STATS_X)?,
             terms_y: pass("ssim_terms_y", shaders::SSIM_TERMS_Y)?,
             blur: pass("blur", shaders::BLUR)?,
+            stats_y: pass("ssim_stats_y", shaders::SSIM_STATS_Y)?,
+            terms_x: pass("ssim_terms_x", shaders::SSIM_TERMS_X)?,
             blur_y: pass("blur_y", shaders::BLUR_Y)?,
             grad_x: pass("loss_grad_x", shaders::LOSS_GRAD_X)?,
             grad: pass("loss_grad", shaders::LOSS_GRAD)?,
@@ -195,11 +210,14 @@ impl PhotometricLoss {
         };
         let inv = (1.0 / weight_sum.max(1.0)) as f32;
         let (render, channels) = (inputs.render.address(), CHANNELS);
-        // 1. x, y, x^2, y^2, xy blurred along x -> a
-        let stats =
-            StatsPush { render, target, stats: s.a.address(), width, height, channels, aligned: aligned as u32 };
-        rec.dispatch(&self.stats_x, &stats, grid_runs_along_x(self.run, width, height, CHANNELS));
-        // 2. blurred along y; SSIM and its weighted partials -> b, the SSIM map
+        // 1. x, y, x^2, y^2, xy blurred along x (along y where aligned) -> a
+        let stats = StatsPush { render, target, stats: s.a.address(), width, height, channels, pad: 0 };
+        if aligned {
+            rec.dispatch(&self.stats_y, &stats, grid_runs_along_y(self.run, width, height, CHANNELS));
+        } else {
+            rec.dispatch(&self.stats_x, &stats, grid_runs_along_x(self.run, width, height, CHANNELS));
+        }
+        // 2. blurred along the other axis; SSIM and its weighted partials -> b, the SSIM map
         let terms = TermsPush {
             stats: s.a.address(),
             terms: s.b.address(),
@@ -212,11 +230,16 @@ impl PhotometricLoss {
             has_mask,
             pad: 0,
         };
-        rec.dispatch(&self.terms_y, &terms, grid_runs_along_y(self.run, width, height, CHANNELS));
+        if aligned {
+            rec.dispatch(&self.terms_x, &terms, grid_runs_along_x(self.run, width, height, CHANNELS));
+        } else {
+            rec.dispatch(&self.terms_y, &terms, grid_runs_along_y(self.run, width, height, CHANNELS));
+        }
         // 3. the partials blurred along x (along y where aligned) -> a
         let blur = BlurPush { src: s.b.address(), dst: s.a.address(), width, height };
         if aligned {
-            rec.dispatch(&self.blur_y, &blur, grid_runs_along_y(self.run, width, height, 3 * CHANNELS));
+            let blur_y = BlurYPush { src: s.b.address(), dst: s.a.address(), width, height, plane_stride: n, pad: 0 };
+            rec.dispatch(&self.blur_y, &blur_y, grid_runs_along_y(self.run, width, height, CHANNELS));
         } else {
             rec.dispatch(&self.blur, &blur, grid_runs_along_x(self.run, width, height, 3 * CHANNELS));
         }

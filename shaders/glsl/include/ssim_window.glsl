@@ -21,6 +21,7 @@ const int SPAN = RUN + 10;
 // `PhotometricLoss::vectorized`), the passes along x move vec4s: on lavapipe a vec4 per lane costs
 // about what a float did (the partials' blur along x went from 13.7 to 7.5 ms at 512x512). Along
 // y the lanes already read consecutive floats, and vec4s of 4 columns measured 1.5x slower there.
-// So there the partials are blurred along y first (blur_y.comp) and the gradient pass runs along x
-// (loss_grad_x.comp). Runs are multiples of 4 outputs in the vec4 passes.
+// So there every pass runs along the other axis (ssim_stats_y, ssim_terms_x, blur_y,
+// loss_grad_x), the two that read the most planes along x. Runs are multiples of 4 outputs in the
+// vec4 passes.
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4s { vec4 v[]; };
