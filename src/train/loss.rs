@@ -186,7 +186,8 @@ impl PhotometricLoss {
     }
 
     /// Whether `record` moves vec4s for an image `width` wide with these inputs: every row and
-    /// buffer 16-byte aligned (width a multiple of 4; the target and mask offsets too).
+    /// buffer 16-byte aligned (width a multiple of 4; the target and mask offsets too). Sizes the
+    /// scratch buffers for width x height, as `record` does.
     pub fn vectorized(&mut self, width: u32, height: u32, inputs: &LossInputs) -> Result<bool> {
         self.reserve(width, height)?;
         let s = self.scratch.as_ref().unwrap();
@@ -236,11 +237,12 @@ impl PhotometricLoss {
             rec.dispatch(&self.terms_y, &terms, grid_runs_along_y(self.run, width, height, CHANNELS));
         }
         // 3. the partials blurred along x (along y where aligned) -> a
-        let blur = BlurPush { src: s.b.address(), dst: s.a.address(), width, height };
+        let (src, dst) = (s.b.address(), s.a.address());
         if aligned {
-            let blur_y = BlurYPush { src: s.b.address(), dst: s.a.address(), width, height, plane_stride: n, pad: 0 };
-            rec.dispatch(&self.blur_y, &blur_y, grid_runs_along_y(self.run, width, height, CHANNELS));
+            let blur = BlurYPush { src, dst, width, height, plane_stride: n, pad: 0 };
+            rec.dispatch(&self.blur_y, &blur, grid_runs_along_y(self.run, width, height, CHANNELS));
         } else {
+            let blur = BlurPush { src, dst, width, height };
             rec.dispatch(&self.blur, &blur, grid_runs_along_x(self.run, width, height, 3 * CHANNELS));
         }
         // 4. along the other axis, combined with L1 into dL/dx, and the L1 map
