@@ -88,10 +88,10 @@ fn check_loss(width: usize, height: usize, masked: bool, seed: u64, run: u32) {
 
 #[test]
 fn loss_value_and_gradient_match_cpu() {
-    // one output per invocation, and runs of 8, 16 and 32 along the blurred axis (GPU and CPU devices),
+    // one output per invocation, and runs of 8, 16, 32 and 64 along the blurred axis (GPU and CPU devices),
     // on sizes that are no multiple of a run; widths 28 and 36 take the vec4 passes (blur along y,
     // gradient along x) for runs of 8 and more
-    for run in [1, 8, 16, 32] {
+    for run in [1, 8, 16, 32, 64] {
         check_loss(23, 19, false, 1, run);
         check_loss(30, 17, true, 2, run);
         check_loss(28, 19, false, 3, run);

@@ -94,10 +94,11 @@ fn grid_runs_along_y(run: u32, width: u32, height: u32, planes: u32) -> [u32; 3]
 
 /// Outputs per invocation along the blurred axis (RUN in ssim_window.glsl). Measured on llvmpipe, the
 /// loss at 512x512 in one session: one output per invocation 470 ms, runs of 8 169 ms, runs of 16
-/// 137 ms; in a later session runs of 16 124 ms, runs of 32 116 ms.
+/// 137 ms; in a later session runs of 16 124 ms, runs of 32 116 ms; with the vec4 passes of aligned
+/// rows, runs of 32 32.8 / 32.9 / 34.8 ms against runs of 64 30.5 / 31.5 / 30.9 ms (alternating).
 fn run_for_device(info: &crate::gpu::DeviceInfo) -> u32 {
     if info.device_type == "CPU" {
-        32
+        64
     } else {
         8
     }
@@ -145,10 +146,10 @@ impl PhotometricLoss {
         Self::with_run(gpu, run_for_device(gpu.info()))
     }
 
-    /// As `new`, with `run` outputs per invocation along the blurred axis (a power of two, 1-32).
+    /// As `new`, with `run` outputs per invocation along the blurred axis (a power of two, 1-64).
     pub fn with_run(gpu: &Gpu, run: u32) -> Result<PhotometricLoss> {
-        if !run.is_power_of_two() || run > 32 {
-            bail!("loss: a run of {run} outputs per invocation is not a power of two up to 32");
+        if !run.is_power_of_two() || run > 64 {
+            bail!("loss: a run of {run} outputs per invocation is not a power of two up to 64");
         }
         let pass = |name, spirv| ComputePipeline::specialized(gpu, name, spirv, &[run]);
         Ok(PhotometricLoss {

@@ -7,7 +7,7 @@
 // exp(-k^2 / (2 * 1.5^2)) for k = -5..5, normalized to sum 1
 const float W[11] = float[11](1.028380084e-03, 7.598758135e-03, 3.600077213e-02, 1.093606895e-01, 2.130055377e-01, 2.660117249e-01, 2.130055377e-01, 1.093606895e-01, 3.600077213e-02, 7.598758135e-03, 1.028380084e-03);
 
-// RUN is chosen per device (train/loss.rs): 32 on CPU devices, where loads are per-lane gathers; 8 on
+// RUN is chosen per device (train/loss.rs): 64 on CPU devices, where loads are per-lane gathers; 8 on
 // GPUs, where the 5 x (RUN + 10) window registers of ssim_terms_y would otherwise spill.
 layout(constant_id = 0) const int RUN = 8;
 const int SPAN = RUN + 10;
