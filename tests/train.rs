@@ -108,25 +108,31 @@ fn train_synth_scene_survives_a_kill_and_reaches_psnr() {
     scene.validate("trained scene").unwrap();
 }
 
-/// Frozen groups do not move; with a trust radius, each geometry tensor moves at most that far per step.
-#[test]
-fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
+/// A GPU context (validation as COGEO_VALIDATE says, on by default) and a one-view dataset: `count`
+/// random Gaussians of SH `sh_degree` (all rotated by `quat`) seen by a 40x30 camera whose image is
+/// uniform noise, all drawn from `seed`.
+fn one_view_scene(
+    seed: u64,
+    count: usize,
+    sh_degree: u32,
+    quat: [f32; 4],
+) -> (cogeo::gpu::Gpu, cogeo::scene::GaussianScene, cogeo::train::dataset::Dataset) {
     use cogeo::gpu::{DeviceChoice, Gpu};
     use cogeo::rng::Rng;
     use cogeo::scene::{Camera, GaussianScene};
     use cogeo::train::dataset::{Dataset, View};
-    use cogeo::train::trainer::{Frozen, TrainConfig, Trainer};
     let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
     let gpu = Gpu::new(&DeviceChoice { selector: None, validate, memory_limit_mib: None }).unwrap();
-    let mut rng = Rng::new(4);
-    let mut scene = GaussianScene { sh_degree: 1, ..Default::default() };
-    for _ in 0..300 {
+    let mut rng = Rng::new(seed);
+    let mut scene = GaussianScene { sh_degree, ..Default::default() };
+    let coefficients = 3 * (sh_degree as usize + 1).pow(2);
+    for _ in 0..count {
         scene.means.push([rng.range(-1.0, 1.0) as f32, rng.range(-0.8, 0.8) as f32, rng.range(-0.5, 0.5) as f32]);
         scene.normals.push([0.0; 3]);
         scene.log_scales.push([-2.5; 3]);
-        scene.quats.push([1.0, 0.1, 0.0, 0.0]);
+        scene.quats.push(quat);
         scene.opacity_logits.push(0.0);
-        scene.sh.extend((0..12).map(|_| (0.5 * rng.normal()) as f32));
+        scene.sh.extend((0..coefficients).map(|_| (0.5 * rng.normal()) as f32));
     }
     let camera = Camera::look_at("v", 40, 30, 60.0, [0.0, -0.2, -3.0], [0.0; 3], [0.0, -1.0, 0.0]);
     let image: Vec<f32> = (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect();
@@ -138,6 +144,14 @@ fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
         warnings: vec![],
         pose_check: None,
     };
+    (gpu, scene, data)
+}
+
+/// Frozen groups do not move; with a trust radius, each geometry tensor moves at most that far per step.
+#[test]
+fn frozen_groups_stay_put_and_trust_region_bounds_each_tensor() {
+    use cogeo::train::trainer::{Frozen, TrainConfig, Trainer};
+    let (gpu, scene, data) = one_view_scene(4, 300, 1, [1.0, 0.1, 0.0, 0.0]);
     let cfg = TrainConfig { iters: 100, densify: false, ..Default::default() };
     let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
 
@@ -336,33 +350,9 @@ fn fused_step_matches_the_passes_apart() {
 /// zero moments: Adam's step is 0), a mask of the wrong size is refused.
 #[test]
 fn loss_masks_weigh_each_pixel() {
-    use cogeo::gpu::{DeviceChoice, Gpu};
-    use cogeo::rng::Rng;
-    use cogeo::scene::{Camera, GaussianScene};
-    use cogeo::train::dataset::{Dataset, View};
+    use cogeo::scene::GaussianScene;
     use cogeo::train::trainer::{TrainConfig, Trainer};
-    let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
-    let gpu = Gpu::new(&DeviceChoice { selector: None, validate, memory_limit_mib: None }).unwrap();
-    let mut rng = Rng::new(9);
-    let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
-    for _ in 0..200 {
-        scene.means.push([rng.range(-1.0, 1.0) as f32, rng.range(-0.8, 0.8) as f32, rng.range(-0.5, 0.5) as f32]);
-        scene.normals.push([0.0; 3]);
-        scene.log_scales.push([-2.5; 3]);
-        scene.quats.push([1.0, 0.0, 0.0, 0.0]);
-        scene.opacity_logits.push(0.0);
-        scene.sh.extend((0..3).map(|_| (0.5 * rng.normal()) as f32));
-    }
-    let camera = Camera::look_at("v", 40, 30, 60.0, [0.0, -0.2, -3.0], [0.0; 3], [0.0, -1.0, 0.0]);
-    let image: Vec<f32> = (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect();
-    let data = Dataset {
-        train: vec![View { camera, image, path: "t".into() }],
-        test: vec![],
-        points: vec![],
-        extent: 2.0,
-        warnings: vec![],
-        pose_check: None,
-    };
+    let (gpu, scene, data) = one_view_scene(9, 200, 0, [1.0, 0.0, 0.0, 0.0]);
     let step = |mask: Option<Vec<f32>>| {
         let cfg = TrainConfig { iters: 10, densify: false, ..Default::default() };
         let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
