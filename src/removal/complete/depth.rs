@@ -191,12 +191,17 @@ pub struct Anchored {
     pub residual: f64,
 }
 
+/// 1 / depth per pixel; 0 where the depth is not positive (unknown).
+pub fn disparity(depth: &[f32]) -> Vec<f32> {
+    depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect()
+}
+
 /// Stage 1: fits `prior` to the rendered depth on `v.valid` and blends it in over the hole with a
 /// mask feathered over `soft_radius` pixels.
 pub fn anchor(v: &DepthView, prior: &[f32], space: PriorSpace, hole: &[bool], soft_radius: f32) -> Result<Anchored> {
     let (w, h) = (v.width, v.height);
     let target: Vec<f32> = match space {
-        PriorSpace::Disparity => v.render_depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect(),
+        PriorSpace::Disparity => disparity(v.render_depth),
         PriorSpace::Depth => v.render_depth.to_vec(),
     };
     let select: Vec<bool> = (0..w * h).map(|i| v.valid[i] && v.render_depth[i] > 0.0).collect();

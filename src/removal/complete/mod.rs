@@ -174,7 +174,7 @@ impl Completer {
                 let found_or_fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || t.found[p]).collect();
                 let avoid = leftover(holes[i], &found_or_fill);
                 let k = Intrinsics::from(&cameras[i]);
-                let disparity: Vec<f32> = c.depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect();
+                let disparity = depth::disparity(&c.depth);
                 let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
                 c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
             }
@@ -229,7 +229,7 @@ impl Completer {
         let rgb = inpainted_again.unwrap_or(rgb);
         let covered: Vec<bool> = (0..w * h).map(|i| v.alpha[i] > 0.5 && !through[i]).collect();
         // depth guides color: the planes around the fill, and which of them each pixel lies on
-        let disparity: Vec<f32> = anchored.depth.iter().map(|&d| if d > 0.0 { 1.0 / d } else { 0.0 }).collect();
+        let disparity = depth::disparity(&anchored.depth);
         let around: Vec<bool> = (0..w * h).map(|i| !fill[i] && covered[i]).collect();
         let planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
         let labels = planes.fill_labels(&anchored.depth, &fill, w);
