@@ -181,7 +181,7 @@ pub struct Trainer {
     /// Every training image, planar RGB, one after another.
     targets: Buffer,
     target_offsets: Vec<u64>,
-    /// Per-pixel loss weights of every training view (`set_loss_masks`), laid out as the targets,
+    /// Per-pixel loss weights of every training view (`set_loss_masks`), one plane per view,
     /// and each view's weight sum.
     loss_masks: Option<(Buffer, Vec<f64>)>,
     pub step: u32,
@@ -266,10 +266,13 @@ impl Trainer {
         if masks.len() != self.target_offsets.len() {
             anyhow::bail!("{} loss masks for {} training views", masks.len(), self.target_offsets.len());
         }
-        let mut all = vec![0f32; self.targets.size() as usize / 4];
+        // one plane per view, one after another: view i's starts at target_offsets[i] / 3 (the
+        // targets are planar RGB)
+        let total = self.targets.size() as usize / 4;
+        let mut all = Vec::with_capacity(total / 3);
         let mut sums = Vec::with_capacity(masks.len());
         for (i, (m, &offset)) in masks.iter().zip(&self.target_offsets).enumerate() {
-            let end = self.target_offsets.get(i + 1).map_or(all.len(), |&o| o as usize);
+            let end = self.target_offsets.get(i + 1).map_or(total, |&o| o as usize);
             if 3 * m.len() != end - offset as usize {
                 anyhow::bail!(
                     "loss mask {i}: {} weights for an image of {} pixels",
@@ -277,8 +280,7 @@ impl Trainer {
                     (end - offset as usize) / 3
                 );
             }
-            // the targets are planar RGB: a view's mask is its first plane's span
-            all[offset as usize..offset as usize + m.len()].copy_from_slice(m);
+            all.extend_from_slice(m);
             sums.push(m.iter().map(|&w| w as f64).sum());
         }
         self.loss_masks = Some((Buffer::from_slice(&self.gpu, "loss masks", &all)?, sums));
@@ -337,7 +339,7 @@ impl Trainer {
             render: outputs.rgb,
             target: &self.targets,
             target_offset: self.target_offsets[vi],
-            mask: self.loss_masks.as_ref().map(|(b, sums)| (b, self.target_offsets[vi], sums[vi])),
+            mask: self.loss_masks.as_ref().map(|(b, sums)| (b, self.target_offsets[vi] / 3, sums[vi])),
         };
         self.loss.record(&mut rec, view.camera.width, view.camera.height, &inputs)?;
         let upstream =
