@@ -9,9 +9,6 @@
 RUNS_ALONG_X;
 layout(push_constant) uniform Push { Floats stats; Floats terms; Floats ssim_map; Floats mask; uint width; uint height; uint channels; float inv_weight_sum; uint has_mask; uint pad; };
 
-const float C1 = 0.0001;  // 0.01^2
-const float C2 = 0.0009;  // 0.03^2
-
 void main() {
     uvec3 id = gl_GlobalInvocationID;
     int x0 = int(id.x) * RUN;
@@ -49,16 +46,13 @@ void main() {
                 exy[e] += w * wxy[t];
             }
         }
-        vec4 sxx = exx - mx * mx, syy = eyy - my * my, sxy = exy - mx * my;
-        vec4 n1 = 2.0 * mx * my + C1, n2 = 2.0 * sxy + C2;
-        vec4 d1 = mx * mx + my * my + C1, d2 = sxx + syy + C2;
-        vec4 d = d1 * d2;
-        vec4 s = n1 * n2 / d;
+        vec4 s, d_mu, d_xx, d_xy;
+        ssim_terms(mx, my, exx, eyy, exy, s, d_mu, d_xx, d_xy);
         uint o = (row + uint(x0)) / 4 + uint(r4);
         vec4 w = (has_mask != 0 ? k4.v[(mask_row + uint(x0)) / 4 + uint(r4)] : vec4(1.0)) * inv_weight_sum;
-        t4.v[o] = w * (2.0 * my * (n2 - n1) / d - 2.0 * mx * s * (d2 - d1) / d);
-        t4.v[q + o] = w * (-s / d2);
-        t4.v[2 * q + o] = w * (2.0 * n1 / d);
+        t4.v[o] = w * d_mu;
+        t4.v[q + o] = w * d_xx;
+        t4.v[2 * q + o] = w * d_xy;
         m4.v[o] = w * s;
     }
 }

@@ -12,8 +12,6 @@
 RUNS_ALONG_Y;
 layout(push_constant) uniform Push { Floats stats; Floats terms; Floats ssim_map; Floats mask; uint width; uint height; uint channels; float inv_weight_sum; uint has_mask; };
 
-const float C1 = 0.0001;  // 0.01^2
-const float C2 = 0.0009;  // 0.03^2
 
 void main() {
     uvec3 id = gl_GlobalInvocationID;
@@ -49,18 +47,13 @@ void main() {
             eyy += w * wyy[r + k];
             exy += w * wxy[r + k];
         }
-        float sxx = exx - mx * mx;
-        float syy = eyy - my * my;
-        float sxy = exy - mx * my;
-        float n1 = 2.0 * mx * my + C1, n2 = 2.0 * sxy + C2;
-        float d1 = mx * mx + my * my + C1, d2 = sxx + syy + C2;
-        float d = d1 * d2;
-        float s = n1 * n2 / d;
+        float s, d_mu, d_xx, d_xy;
+        ssim_terms(mx, my, exx, eyy, exy, s, d_mu, d_xx, d_xy);
         uint pix = uint(y0 + r) * width + id.x, o = id.z * hw + pix;
         float w = (has_mask != 0 ? mask.v[pix] : 1.0) * inv_weight_sum;
-        terms.v[o] = w * (2.0 * my * (n2 - n1) / d - 2.0 * mx * s * (d2 - d1) / d);
-        terms.v[n + o] = w * (-s / d2);
-        terms.v[2 * n + o] = w * (2.0 * n1 / d);
+        terms.v[o] = w * d_mu;
+        terms.v[n + o] = w * d_xx;
+        terms.v[2 * n + o] = w * d_xy;
         ssim_map.v[o] = w * s;
     }
 }

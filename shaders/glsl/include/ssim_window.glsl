@@ -12,6 +12,26 @@ const float W[11] = float[11](1.028380084e-03, 7.598758135e-03, 3.600077213e-02,
 layout(constant_id = 0) const int RUN = 8;
 const int SPAN = RUN + 10;
 
+const float C1 = 0.0001;  // 0.01^2
+const float C2 = 0.0009;  // 0.03^2
+
+// From the windowed means mu_x, mu_y and second moments E[x^2], E[y^2], E[xy]: the SSIM value s
+// and its partials with respect to mu_x, E[x^2] and E[xy] (derived in ssim_terms_y.comp), for one
+// pixel (float) or four (vec4; ssim_terms_x.comp).
+#define SSIM_TERMS(T) \
+    void ssim_terms(T mx, T my, T exx, T eyy, T exy, out T s, out T d_mu, out T d_xx, out T d_xy) { \
+        T sxx = exx - mx * mx, syy = eyy - my * my, sxy = exy - mx * my; \
+        T n1 = 2.0 * mx * my + C1, n2 = 2.0 * sxy + C2; \
+        T d1 = mx * mx + my * my + C1, d2 = sxx + syy + C2; \
+        T d = d1 * d2; \
+        s = n1 * n2 / d; \
+        d_mu = 2.0 * my * (n2 - n1) / d - 2.0 * mx * s * (d2 - d1) / d; \
+        d_xx = -s / d2; \
+        d_xy = 2.0 * n1 / d; \
+    }
+SSIM_TERMS(float)
+SSIM_TERMS(vec4)
+
 // Workgroup shapes: runs along x are 8 runs (64 pixels) wide and 8 rows high; runs along y are 64
 // columns wide, so each row of a run is one contiguous 64-float read.
 #define RUNS_ALONG_X layout(local_size_x = 8, local_size_y = 8) in
