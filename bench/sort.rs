@@ -1,9 +1,12 @@
 //! Sort benchmark: the GPU radix sort of (u32 key, u32 value) pairs against Rust's `sort_unstable`
 //! on the same data.
 //!
-//!   cargo bench --bench sort [-- --sizes 1000000,4000000,16000000 --runs 3]
+//!   cargo bench --bench sort [-- --sizes 1000000,4000000,16000000 --runs 3 --shape ballot|lanes]
 //!
-//! The roofline: the bytes the sort must move (render::sort::bytes_moved) over the device's compute
+//! The sort runs in the shape the device gets (render::sort::SortShape::for_device) unless
+//! `--shape` names one; results of a named shape go to sort-<device>-<shape>.json.
+//!
+//! The roofline: the bytes the sort must move (render::sort::RadixSort::bytes_moved) over the device's compute
 //! copy bandwidth is the fastest any sort with these passes could run here; the table shows the
 //! sort's share of that and the ratio to `sort_unstable` a sort at the roof would reach.
 //!
@@ -13,7 +16,7 @@
 mod common;
 
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
-use cogeo::render::sort::{bytes_moved, RadixSort};
+use cogeo::render::sort::{RadixSort, SortShape};
 use cogeo::rng::Rng;
 use std::time::Instant;
 
@@ -24,7 +27,15 @@ fn main() {
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());
     let roof = common::copy_bandwidth(&gpu);
-    let mut sort = RadixSort::new(&gpu).unwrap();
+    let named = common::arg(&args, "--shape");
+    let shape = match named.as_deref() {
+        None => SortShape::for_device(gpu.info()),
+        Some("ballot") => SortShape::Ballot,
+        Some("lanes") => SortShape::LaneSerial,
+        Some(other) => panic!("--shape {other}: expected ballot or lanes"),
+    };
+    let mut sort = RadixSort::with_shape(&gpu, shape).unwrap();
+    println!("shape: {shape:?}, {} keys per block", sort.block_keys());
     let mut rows = Vec::new();
     for &n in &sizes {
         let mut rng = Rng::new(n as u64);
@@ -61,7 +72,7 @@ fn main() {
         }
         let g = common::median(gpu_ms);
         let c = common::median(cpu_ms);
-        let mb = bytes_moved(n as u64, 32) as f64 / 1e6;
+        let mb = sort.bytes_moved(n as u64, 32) as f64 / 1e6;
         let share = mb / g / roof.roof_gbps(); // MB per ms is GB/s
         let roof_ms = mb / roof.roof_gbps();
         println!(
@@ -95,9 +106,11 @@ fn main() {
             f("speedup_at_roof")
         );
     }
-    let path = common::results_path(&format!("sort-{}.json", common::device_slug(&gpu)));
+    let suffix = named.map(|s| format!("-{s}")).unwrap_or_default();
+    let path = common::results_path(&format!("sort-{}{suffix}.json", common::device_slug(&gpu)));
     common::write_json(
         &path,
-        &serde_json::json!({ "device": gpu.info().summary(), "copy_bandwidth": roof, "runs": runs, "rows": rows }),
+        &serde_json::json!({ "device": gpu.info().summary(), "shape": format!("{shape:?}"),
+                             "block_keys": sort.block_keys(), "copy_bandwidth": roof, "runs": runs, "rows": rows }),
     );
 }

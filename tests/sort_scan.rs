@@ -5,7 +5,7 @@ mod common;
 
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
 use cogeo::render::scan::{PrefixScan, SCAN_BLOCK};
-use cogeo::render::sort::{RadixSort, BLOCK_KEYS};
+use cogeo::render::sort::{RadixSort, SortShape, LANE_SERIAL_MAX_LANES};
 use cogeo::rng::Rng;
 use common::gpu;
 
@@ -32,50 +32,95 @@ fn check_sort(g: &cogeo::gpu::Gpu, sort: &mut RadixSort, keys: &[u32], bits: u32
         assert_eq!(
             (got_keys[i], got_values[i]),
             expected[i],
-            "n = {n}, bits = {bits}: mismatch at {i} (GPU key {:#x}, value {})",
+            "{:?} shape, n = {n}, bits = {bits}: mismatch at {i} (GPU key {:#x}, value {})",
+            sort.shape(),
             got_keys[i],
             got_values[i]
         );
     }
 }
 
+/// Both shapes of the sort, whichever the device would pick: each is checked everywhere. The
+/// lane-serial shape has counter rows for at most LANE_SERIAL_MAX_LANES lanes and says so beyond.
+fn both_shapes(g: &cogeo::gpu::Gpu) -> Vec<RadixSort> {
+    let mut sorts = vec![RadixSort::with_shape(g, SortShape::Ballot).unwrap()];
+    match RadixSort::with_shape(g, SortShape::LaneSerial) {
+        Ok(sort) => sorts.push(sort),
+        Err(e) => {
+            assert!(g.info().subgroup_size > LANE_SERIAL_MAX_LANES, "lane-serial sort failed: {e:#}");
+            eprintln!("lane-serial shape not available here: {e:#}");
+        }
+    }
+    assert_eq!(RadixSort::new(g).unwrap().shape(), SortShape::for_device(g.info()));
+    sorts
+}
+
 #[test]
 fn radix_sort_matches_stable_cpu_sort_around_block_boundaries() {
     let g = gpu();
-    let mut sort = RadixSort::new(&g).unwrap();
-    let mut rng = Rng::new(3);
-    let b = BLOCK_KEYS as usize;
-    for &n in &[1usize, 2, 15, 16, 17, 255, 256, 257, b - 1, b, b + 1, 2 * b - 1, 2 * b + 1, 3 * b + 77, 100_003] {
-        let full: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
-        check_sort(&g, &mut sort, &full, 32);
-        // heavy duplicates: stability decides the value order
-        let dups: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 7) as u32).collect();
-        check_sort(&g, &mut sort, &dups, 32);
+    for mut sort in both_shapes(&g) {
+        let b = sort.block_keys() as usize;
+        // a lane's slice in the lane-serial shape is b / subgroup keys: cut inside, at and past
+        // slices, and off uvec4 boundaries
+        let slice = b / g.info().subgroup_size as usize;
+        let mut rng = Rng::new(3);
+        for &n in &[
+            1usize,
+            2,
+            15,
+            16,
+            17,
+            255,
+            256,
+            257,
+            slice - 1,
+            slice,
+            slice + 1,
+            3 * slice + 2,
+            b - 1,
+            b,
+            b + 1,
+            2 * b - 1,
+            2 * b + 1,
+            3 * b + 77,
+            100_003,
+        ] {
+            let full: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
+            check_sort(&g, &mut sort, &full, 32);
+            // heavy duplicates: stability decides the value order
+            let dups: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 7) as u32).collect();
+            check_sort(&g, &mut sort, &dups, 32);
+        }
     }
 }
 
 #[test]
 fn radix_sort_partial_key_widths_and_degenerate_inputs() {
     let g = gpu();
-    let mut sort = RadixSort::new(&g).unwrap();
+    for mut sort in both_shapes(&g) {
+        partial_widths_and_degenerate_inputs(&g, &mut sort);
+    }
+}
+
+fn partial_widths_and_degenerate_inputs(g: &cogeo::gpu::Gpu, sort: &mut RadixSort) {
     let mut rng = Rng::new(5);
     let n = 50_000;
     // 13 bits (tile ids at 1080p), 31 bits (positive float depths), odd pass counts (5 bits -> 1,
     // 17 -> 3) and a last pass narrower than a digit (9, 13, 17, 31)
     for bits in [5u32, 9, 13, 17, 31] {
         let keys: Vec<u32> = (0..n).map(|_| (rng.next_u64() as u32) & ((1u32 << bits) - 1)).collect();
-        check_sort(&g, &mut sort, &keys, bits);
+        check_sort(g, sort, &keys, bits);
     }
     // only the low bits are sorted on: high bits must travel with the key but not order it
     let keys: Vec<u32> = (0..n).map(|_| rng.next_u64() as u32).collect();
-    check_sort(&g, &mut sort, &keys, 8);
+    check_sort(g, sort, &keys, 8);
     // ... also where the width ends inside a digit: bits 13-15 share the second digit with 8-12
-    check_sort(&g, &mut sort, &keys, 13);
-    check_sort(&g, &mut sort, &vec![42u32; n], 32);
+    check_sort(g, sort, &keys, 13);
+    check_sort(g, sort, &vec![42u32; n], 32);
     let descending: Vec<u32> = (0..n as u32).rev().collect();
-    check_sort(&g, &mut sort, &descending, 32);
+    check_sort(g, sort, &descending, 32);
     let floats: Vec<u32> = (0..n).map(|_| (rng.range(0.01, 100.0) as f32).to_bits()).collect();
-    check_sort(&g, &mut sort, &floats, 31);
+    check_sort(g, sort, &floats, 31);
 }
 
 #[test]

@@ -4,6 +4,8 @@
 #include "common.glsl"
 #include "radix_common.glsl"
 
+shared uint s_hist[RADIX];
+
 void main() {
     uint block = linear_group_id();
     if (block >= num_blocks) return;

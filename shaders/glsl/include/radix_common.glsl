@@ -5,7 +5,8 @@
 // row that share a digit find each other with ballots (match_digit); the last of them bumps the
 // block's running digit offsets, so ranking needs no atomics, no per-subgroup histograms to clear and
 // combine, and no rank storage between phases. No workgroup waits on another (no forward-progress assumption).
-// Stable: rows in order, lanes in order, blocks in order.
+// Stable: rows in order, lanes in order, blocks in order. CPU drivers use the lane-serial shape of the
+// count and scatter instead (radix_lanes.glsl); the histogram and its scan are the same.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
 
@@ -14,7 +15,8 @@ layout(local_size_x_id = 0) in;
 
 const uint RADIX_BITS = 8;
 const uint RADIX = 1u << RADIX_BITS;
-const uint BLOCK_KEYS = 4096;  // render::sort::BLOCK_KEYS
+// Keys per block, specialized per shape (render::sort::SortShape::block_keys).
+layout(constant_id = 1) const uint BLOCK_KEYS = 4096;
 
 layout(push_constant) uniform Push {
     Uints keys_in;
@@ -26,9 +28,8 @@ layout(push_constant) uniform Push {
     uint shift;
     uint num_blocks;
     uint digit_mask;   // (1 << bits of this pass) - 1: key bits above the sorted width never order
+    Uints lane_offsets;  // lane-serial shape only (radix_lanes.glsl)
 };
-
-shared uint s_hist[RADIX];
 
 uint digit_of(uint key) { return (key >> shift) & digit_mask; }
 
