@@ -12,15 +12,13 @@ void main() {
     int x0 = int(id.x) * RUN;
     if (x0 >= int(width) || id.y >= height) return;
     uint row = (id.z * height + id.y) * width;
-    float win[SPAN];
-    for (int j = 0; j < SPAN; j++) {
-        int p = x0 - 5 + j;
-        win[j] = 0.0;
-        if (p >= 0 && p < int(width)) win[j] = src.v[row + uint(p)];
-    }
+    TAPS(v)
+#define LOAD(p, k) { int p_ = (p); v##k = p_ >= 0 && p_ < int(width) ? src.v[row + uint(max(p_, 0))] : 0.0; }
+    LOAD(x0 - 5, 1) LOAD(x0 - 4, 2) LOAD(x0 - 3, 3) LOAD(x0 - 2, 4) LOAD(x0 - 1, 5)
+    LOAD(x0, 6) LOAD(x0 + 1, 7) LOAD(x0 + 2, 8) LOAD(x0 + 3, 9) LOAD(x0 + 4, 10)
     for (int r = 0; r < RUN && x0 + r < int(width); r++) {
-        float acc = 0.0;
-        for (int k = 0; k < 11; k++) acc += W[k] * win[r + k];
-        dst.v[row + uint(x0 + r)] = acc;
+        SLIDE(v)
+        LOAD(x0 + r + 5, 10)
+        dst.v[row + uint(x0 + r)] = WINDOW(v);
     }
 }

@@ -15,32 +15,19 @@ void main() {
     if (id.x >= width || y0 >= int(height)) return;
     uint hw = width * height, n = hw * channels;
     uint column = id.z * hw + id.x;
-    float wa[SPAN], wb[SPAN], wc[SPAN];
-    for (int j = 0; j < SPAN; j++) {
-        int p = y0 - 5 + j;
-        wa[j] = 0.0;
-        wb[j] = 0.0;
-        wc[j] = 0.0;
-        if (p >= 0 && p < int(height)) {
-            uint i = column + uint(p) * width;
-            wa[j] = terms_x.v[i];
-            wb[j] = terms_x.v[n + i];
-            wc[j] = terms_x.v[2 * n + i];
-        }
-    }
+    TAPS(a) TAPS(b) TAPS(c)
+#define LOAD(p, k) { int p_ = (p); bool in_ = p_ >= 0 && p_ < int(height); uint i_ = column + uint(max(p_, 0)) * width; \
+        a##k = in_ ? terms_x.v[i_] : 0.0; b##k = in_ ? terms_x.v[n + i_] : 0.0; c##k = in_ ? terms_x.v[2 * n + i_] : 0.0; }
+    LOAD(y0 - 5, 1) LOAD(y0 - 4, 2) LOAD(y0 - 3, 3) LOAD(y0 - 2, 4) LOAD(y0 - 1, 5)
+    LOAD(y0, 6) LOAD(y0 + 1, 7) LOAD(y0 + 2, 8) LOAD(y0 + 3, 9) LOAD(y0 + 4, 10)
     for (int r = 0; r < RUN && y0 + r < int(height); r++) {
-        float a = 0.0, b = 0.0, c = 0.0;
-        for (int k = 0; k < 11; k++) {
-            float w = W[k];
-            a += w * wa[r + k];
-            b += w * wb[r + k];
-            c += w * wc[r + k];
-        }
+        SLIDE(a) SLIDE(b) SLIDE(c)
+        LOAD(y0 + r + 5, 10)
         uint pix = uint(y0 + r) * width + id.x, o = id.z * hw + pix;
         float x = render.v[o], y = target.v[o];
         float w = (has_mask != 0 ? mask.v[pix] : 1.0) * inv_weight_sum;
         float diff = x - y;
-        dl_dx.v[o] = (1.0 - lambda) * w * sign(diff) - lambda * (a + 2.0 * x * b + y * c);
+        dl_dx.v[o] = (1.0 - lambda) * w * sign(diff) - lambda * (WINDOW(a) + 2.0 * x * WINDOW(b) + y * WINDOW(c));
         l1_map.v[o] = w * abs(diff);
     }
 }

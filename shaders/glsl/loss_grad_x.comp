@@ -19,35 +19,19 @@ void main() {
     uint row = id.z * hw + id.y * width, mask_row = id.y * width;
     Vec4s t4 = Vec4s(terms_y), r4 = Vec4s(render), y4 = Vec4s(target), g4 = Vec4s(dl_dx), l4 = Vec4s(l1_map);
     Vec4s k4 = Vec4s(mask);
-    float wa[RUN + 16], wb[RUN + 16], wc[RUN + 16];
-    for (int j = 0; j < RUN / 4 + 4; j++) {
-        int p = x0 - 8 + 4 * j;
-        bool inside = p >= 0 && p < int(width);
-        uint i = (row + uint(max(p, 0))) / 4;
-        vec4 a = inside ? t4.v[i] : vec4(0.0), b = inside ? t4.v[q + i] : vec4(0.0), c = inside ? t4.v[2 * q + i] : vec4(0.0);
-        for (int e = 0; e < 4; e++) {
-            wa[4 * j + e] = a[e];
-            wb[4 * j + e] = b[e];
-            wc[4 * j + e] = c[e];
-        }
-    }
-    for (int r4i = 0; r4i < RUN / 4; r4i++) {
-        if (x0 + 4 * r4i >= int(width)) continue;
-        vec4 a = vec4(0.0), b = vec4(0.0), c = vec4(0.0);
-        for (int e = 0; e < 4; e++) {
-            for (int k = 0; k < 11; k++) {
-                float w = W[k];
-                a[e] += w * wa[4 * r4i + e + 3 + k];
-                b[e] += w * wb[4 * r4i + e + 3 + k];
-                c[e] += w * wc[4 * r4i + e + 3 + k];
-            }
-        }
+    TAPS4(a) TAPS4(b) TAPS4(c)
+    // vec4 j of the run's inputs, which start at x0 - 8
+#define LOAD(j, k) { int p_ = x0 - 8 + 4 * (j); bool in_ = p_ >= 0 && p_ < int(width); uint i_ = (row + uint(max(p_, 0))) / 4; \
+        a##k = in_ ? t4.v[i_] : vec4(0.0); b##k = in_ ? t4.v[q + i_] : vec4(0.0); c##k = in_ ? t4.v[2 * q + i_] : vec4(0.0); }
+    LOAD(0, 1) LOAD(1, 2) LOAD(2, 3) LOAD(3, 4)
+    for (int r4i = 0; r4i < RUN / 4 && x0 + 4 * r4i < int(width); r4i++) {
+        SLIDE4(a) SLIDE4(b) SLIDE4(c)
+        LOAD(r4i + 4, 4)
         uint o = (row + uint(x0)) / 4 + uint(r4i);
         vec4 x = r4.v[o], y = y4.v[o];
         vec4 w = (has_mask != 0 ? k4.v[(mask_row + uint(x0)) / 4 + uint(r4i)] : vec4(1.0)) * inv_weight_sum;
         vec4 diff = x - y;
-        g4.v[o] = (1.0 - lambda) * w * sign(diff) - lambda * (a + 2.0 * x * b + y * c);
+        g4.v[o] = (1.0 - lambda) * w * sign(diff) - lambda * (WINDOW4(a) + 2.0 * x * WINDOW4(b) + y * WINDOW4(c));
         l4.v[o] = w * abs(diff);
     }
 }
-

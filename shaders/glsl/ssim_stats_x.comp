@@ -14,31 +14,19 @@ void main() {
     if (x0 >= int(width) || id.y >= height) return;
     uint hw = width * height, n = hw * channels;
     uint row = id.z * hw + id.y * width;
-    float wx[SPAN], wy[SPAN];
-    for (int j = 0; j < SPAN; j++) {
-        int p = x0 - 5 + j;
-        wx[j] = 0.0;
-        wy[j] = 0.0;
-        if (p >= 0 && p < int(width)) {
-            wx[j] = render.v[row + uint(p)];
-            wy[j] = target.v[row + uint(p)];
-        }
-    }
+    TAPS(xs) TAPS(ys)  // x (render) and y (target) under the window
+#define LOAD(p, k) { int p_ = (p); bool in_ = p_ >= 0 && p_ < int(width); uint i_ = row + uint(max(p_, 0)); \
+        xs##k = in_ ? render.v[i_] : 0.0; ys##k = in_ ? target.v[i_] : 0.0; }
+    LOAD(x0 - 5, 1) LOAD(x0 - 4, 2) LOAD(x0 - 3, 3) LOAD(x0 - 2, 4) LOAD(x0 - 1, 5)
+    LOAD(x0, 6) LOAD(x0 + 1, 7) LOAD(x0 + 2, 8) LOAD(x0 + 3, 9) LOAD(x0 + 4, 10)
     for (int r = 0; r < RUN && x0 + r < int(width); r++) {
-        float sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
-        for (int k = 0; k < 11; k++) {
-            float x = wx[r + k], y = wy[r + k], w = W[k];
-            sx += w * x;
-            sy += w * y;
-            sxx += w * (x * x);
-            syy += w * (y * y);
-            sxy += w * (x * y);
-        }
+        SLIDE(xs) SLIDE(ys)
+        LOAD(x0 + r + 5, 10)
         uint o = row + uint(x0 + r);
-        stats.v[o] = sx;
-        stats.v[n + o] = sy;
-        stats.v[2 * n + o] = sxx;
-        stats.v[3 * n + o] = syy;
-        stats.v[4 * n + o] = sxy;
+        stats.v[o] = WINDOW(xs);
+        stats.v[n + o] = WINDOW(ys);
+        stats.v[2 * n + o] = WINDOW_OF_PRODUCTS(xs, xs);
+        stats.v[3 * n + o] = WINDOW_OF_PRODUCTS(ys, ys);
+        stats.v[4 * n + o] = WINDOW_OF_PRODUCTS(xs, ys);
     }
 }

@@ -15,29 +15,19 @@ void main() {
     if (id.x >= width || y0 >= int(height)) return;
     uint hw = width * height, n = hw * channels;
     uint column = id.z * hw + id.x;
-    float wx[SPAN], wy[SPAN];
-    for (int j = 0; j < SPAN; j++) {
-        int p = y0 - 5 + j;
-        bool inside = p >= 0 && p < int(height);
-        uint i = column + uint(max(p, 0)) * width;
-        wx[j] = inside ? render.v[i] : 0.0;
-        wy[j] = inside ? target.v[i] : 0.0;
-    }
+    TAPS(xs) TAPS(ys)  // x (render) and y (target) under the window
+#define LOAD(p, k) { int p_ = (p); bool in_ = p_ >= 0 && p_ < int(height); uint i_ = column + uint(max(p_, 0)) * width; \
+        xs##k = in_ ? render.v[i_] : 0.0; ys##k = in_ ? target.v[i_] : 0.0; }
+    LOAD(y0 - 5, 1) LOAD(y0 - 4, 2) LOAD(y0 - 3, 3) LOAD(y0 - 2, 4) LOAD(y0 - 1, 5)
+    LOAD(y0, 6) LOAD(y0 + 1, 7) LOAD(y0 + 2, 8) LOAD(y0 + 3, 9) LOAD(y0 + 4, 10)
     for (int r = 0; r < RUN && y0 + r < int(height); r++) {
-        float sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
-        for (int k = 0; k < 11; k++) {
-            float x = wx[r + k], y = wy[r + k], w = W[k];
-            sx += w * x;
-            sy += w * y;
-            sxx += w * (x * x);
-            syy += w * (y * y);
-            sxy += w * (x * y);
-        }
+        SLIDE(xs) SLIDE(ys)
+        LOAD(y0 + r + 5, 10)
         uint o = column + uint(y0 + r) * width;
-        stats.v[o] = sx;
-        stats.v[n + o] = sy;
-        stats.v[2 * n + o] = sxx;
-        stats.v[3 * n + o] = syy;
-        stats.v[4 * n + o] = sxy;
+        stats.v[o] = WINDOW(xs);
+        stats.v[n + o] = WINDOW(ys);
+        stats.v[2 * n + o] = WINDOW_OF_PRODUCTS(xs, xs);
+        stats.v[3 * n + o] = WINDOW_OF_PRODUCTS(ys, ys);
+        stats.v[4 * n + o] = WINDOW_OF_PRODUCTS(xs, ys);
     }
 }

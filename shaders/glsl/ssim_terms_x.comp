@@ -16,38 +16,17 @@ void main() {
     uint hw = width * height, q = hw * channels / 4;
     uint row = id.z * hw + id.y * width, mask_row = id.y * width;
     Vec4s s4 = Vec4s(stats), t4 = Vec4s(terms), m4 = Vec4s(ssim_map), k4 = Vec4s(mask);
-    float wmx[RUN + 16], wmy[RUN + 16], wxx[RUN + 16], wyy[RUN + 16], wxy[RUN + 16];
-    for (int j = 0; j < RUN / 4 + 4; j++) {
-        int p = x0 - 8 + 4 * j;
-        bool inside = p >= 0 && p < int(width);
-        uint i = (row + uint(max(p, 0))) / 4;
-        vec4 a = inside ? s4.v[i] : vec4(0.0), b = inside ? s4.v[q + i] : vec4(0.0);
-        vec4 c = inside ? s4.v[2 * q + i] : vec4(0.0), d = inside ? s4.v[3 * q + i] : vec4(0.0);
-        vec4 e4 = inside ? s4.v[4 * q + i] : vec4(0.0);
-        for (int e = 0; e < 4; e++) {
-            wmx[4 * j + e] = a[e];
-            wmy[4 * j + e] = b[e];
-            wxx[4 * j + e] = c[e];
-            wyy[4 * j + e] = d[e];
-            wxy[4 * j + e] = e4[e];
-        }
-    }
-    for (int r4 = 0; r4 < RUN / 4; r4++) {
-        if (x0 + 4 * r4 >= int(width)) continue;
-        vec4 mx = vec4(0.0), my = vec4(0.0), exx = vec4(0.0), eyy = vec4(0.0), exy = vec4(0.0);
-        for (int e = 0; e < 4; e++) {
-            for (int k = 0; k < 11; k++) {
-                int t = 4 * r4 + e + 3 + k;
-                float w = W[k];
-                mx[e] += w * wmx[t];
-                my[e] += w * wmy[t];
-                exx[e] += w * wxx[t];
-                eyy[e] += w * wyy[t];
-                exy[e] += w * wxy[t];
-            }
-        }
+    TAPS4(mx) TAPS4(my) TAPS4(xx) TAPS4(yy) TAPS4(xy)
+    // vec4 j of the run's inputs, which start at x0 - 8
+#define LOAD(j, k) { int p_ = x0 - 8 + 4 * (j); bool in_ = p_ >= 0 && p_ < int(width); uint i_ = (row + uint(max(p_, 0))) / 4; \
+        mx##k = in_ ? s4.v[i_] : vec4(0.0); my##k = in_ ? s4.v[q + i_] : vec4(0.0); xx##k = in_ ? s4.v[2 * q + i_] : vec4(0.0); \
+        yy##k = in_ ? s4.v[3 * q + i_] : vec4(0.0); xy##k = in_ ? s4.v[4 * q + i_] : vec4(0.0); }
+    LOAD(0, 1) LOAD(1, 2) LOAD(2, 3) LOAD(3, 4)
+    for (int r4 = 0; r4 < RUN / 4 && x0 + 4 * r4 < int(width); r4++) {
+        SLIDE4(mx) SLIDE4(my) SLIDE4(xx) SLIDE4(yy) SLIDE4(xy)
+        LOAD(r4 + 4, 4)
         vec4 s, d_mu, d_xx, d_xy;
-        ssim_terms(mx, my, exx, eyy, exy, s, d_mu, d_xx, d_xy);
+        ssim_terms(WINDOW4(mx), WINDOW4(my), WINDOW4(xx), WINDOW4(yy), WINDOW4(xy), s, d_mu, d_xx, d_xy);
         uint o = (row + uint(x0)) / 4 + uint(r4);
         vec4 w = (has_mask != 0 ? k4.v[(mask_row + uint(x0)) / 4 + uint(r4)] : vec4(1.0)) * inv_weight_sum;
         t4.v[o] = w * d_mu;

@@ -20,35 +20,17 @@ void main() {
     uint hw = width * height, n = hw * channels;
     uint column = id.z * hw + id.x;
     // windows of the five x-blurred statistics down this column
-    float wmx[SPAN], wmy[SPAN], wxx[SPAN], wyy[SPAN], wxy[SPAN];
-    for (int j = 0; j < SPAN; j++) {
-        int p = y0 - 5 + j;
-        wmx[j] = 0.0;
-        wmy[j] = 0.0;
-        wxx[j] = 0.0;
-        wyy[j] = 0.0;
-        wxy[j] = 0.0;
-        if (p >= 0 && p < int(height)) {
-            uint i = column + uint(p) * width;
-            wmx[j] = stats.v[i];
-            wmy[j] = stats.v[n + i];
-            wxx[j] = stats.v[2 * n + i];
-            wyy[j] = stats.v[3 * n + i];
-            wxy[j] = stats.v[4 * n + i];
-        }
-    }
+    TAPS(mx) TAPS(my) TAPS(xx) TAPS(yy) TAPS(xy)
+#define LOAD(p, k) { int p_ = (p); bool in_ = p_ >= 0 && p_ < int(height); uint i_ = column + uint(max(p_, 0)) * width; \
+        mx##k = in_ ? stats.v[i_] : 0.0; my##k = in_ ? stats.v[n + i_] : 0.0; xx##k = in_ ? stats.v[2 * n + i_] : 0.0; \
+        yy##k = in_ ? stats.v[3 * n + i_] : 0.0; xy##k = in_ ? stats.v[4 * n + i_] : 0.0; }
+    LOAD(y0 - 5, 1) LOAD(y0 - 4, 2) LOAD(y0 - 3, 3) LOAD(y0 - 2, 4) LOAD(y0 - 1, 5)
+    LOAD(y0, 6) LOAD(y0 + 1, 7) LOAD(y0 + 2, 8) LOAD(y0 + 3, 9) LOAD(y0 + 4, 10)
     for (int r = 0; r < RUN && y0 + r < int(height); r++) {
-        float mx = 0.0, my = 0.0, exx = 0.0, eyy = 0.0, exy = 0.0;
-        for (int k = 0; k < 11; k++) {
-            float w = W[k];
-            mx += w * wmx[r + k];
-            my += w * wmy[r + k];
-            exx += w * wxx[r + k];
-            eyy += w * wyy[r + k];
-            exy += w * wxy[r + k];
-        }
+        SLIDE(mx) SLIDE(my) SLIDE(xx) SLIDE(yy) SLIDE(xy)
+        LOAD(y0 + r + 5, 10)
         float s, d_mu, d_xx, d_xy;
-        ssim_terms(mx, my, exx, eyy, exy, s, d_mu, d_xx, d_xy);
+        ssim_terms(WINDOW(mx), WINDOW(my), WINDOW(xx), WINDOW(yy), WINDOW(xy), s, d_mu, d_xx, d_xy);
         uint pix = uint(y0 + r) * width + id.x, o = id.z * hw + pix;
         float w = (has_mask != 0 ? mask.v[pix] : 1.0) * inv_weight_sum;
         terms.v[o] = w * d_mu;
