@@ -25,7 +25,8 @@ void main() {
     if (tile >= p.tiles_x * p.tiles_y) return;  // uniform over the workgroup
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
 
-    uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
+    uvec2 range = UVec2View(p.tile_ranges).v[tile];
+    uint start = range.x, end = range.y;
     vec2 pixel[ROWS];
     float T[ROWS], D[ROWS], W[ROWS];
     vec3 C[ROWS];
@@ -57,10 +58,9 @@ void main() {
         float my_reach = -1.0;  // past the end: reaches no row
         if (k < end) {
             uint g = p.isect_gauss.v[k];
-            my_xy = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            my_co = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1], p.conic_opacity.v[4 * g + 2],
-                         p.conic_opacity.v[4 * g + 3]);
-            my_cd = vec4(p.color.v[3 * g], p.color.v[3 * g + 1], p.color.v[3 * g + 2], p.depth.v[g]);
+            my_xy = Vec2View(p.xy).v[g];
+            my_co = Vec4View(p.conic_opacity).v[g];
+            my_cd = vec4(Vec3View(p.color).v[g], p.depth.v[g]);
             my_reach = row_reach(my_co);
         }
         uint count = min(lanes, end - batch);

@@ -23,7 +23,8 @@ void main() {
     if (tile >= p.tiles_x * p.tiles_y) return;  // uniform over the workgroup
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
 
-    uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
+    uvec2 range = UVec2View(p.tile_ranges).v[tile];
+    uint start = range.x, end = range.y;
     vec2 pixel[ROWS];
     float T[ROWS];
     float acc[ROWS * CHANNELS];
@@ -52,9 +53,8 @@ void main() {
         for (uint c = 0; c < CHANNELS; c++) my_features[c] = 0.0;
         if (k < end) {
             uint g = p.isect_gauss.v[k];
-            my_xy = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-            my_co = vec4(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1], p.conic_opacity.v[4 * g + 2],
-                         p.conic_opacity.v[4 * g + 3]);
+            my_xy = Vec2View(p.xy).v[g];
+            my_co = Vec4View(p.conic_opacity).v[g];
             my_reach = row_reach(my_co);
             uint base = g * p.feature_dim + channel_offset;
             for (uint c = 0; c < CHANNELS; c++) my_features[c] = c < channels ? p.features.v[base + c] : 0.0;

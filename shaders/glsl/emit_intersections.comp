@@ -17,10 +17,11 @@ void main() {
     uint g = p.depth_order.v[s];
     if (p.tiles_touched.v[g] == 0) return;
     uint slot = p.isect_offsets.v[s];
-    vec2 xy = vec2(p.xy.v[2 * g], p.xy.v[2 * g + 1]);
-    vec3 conic = vec3(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1], p.conic_opacity.v[4 * g + 2]);
-    float threshold = binning_q_threshold(p.conic_opacity.v[4 * g + 3]);
-    uvec4 rect = uvec4(p.tile_rect.v[4 * g], p.tile_rect.v[4 * g + 1], p.tile_rect.v[4 * g + 2], p.tile_rect.v[4 * g + 3]);
+    vec2 xy = Vec2View(p.xy).v[g];
+    vec4 conic_opacity = Vec4View(p.conic_opacity).v[g];
+    vec3 conic = conic_opacity.xyz;
+    float threshold = binning_q_threshold(conic_opacity.w);
+    uvec4 rect = UVec4View(p.tile_rect).v[g];
     for (uint ty = rect.y; ty < rect.w; ty++)
         for (uint tx = rect.x; tx < rect.z; tx++)
             if (gaussian_touches_tile(xy, conic, threshold, tx, ty, p.width, p.height)) {

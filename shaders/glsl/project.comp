@@ -16,7 +16,7 @@ void cull(uint g) {
     p.tiles_touched.v[g] = 0;
     p.depth_keys.v[g] = 0x7fffffffu;
     p.depth.v[g] = 0.0;
-    for (int i = 0; i < 4; i++) p.tile_rect.v[4 * g + i] = 0;
+    UVec4View(p.tile_rect).v[g] = uvec4(0);
 }
 
 void main() {
@@ -24,7 +24,7 @@ void main() {
     if (g >= p.num_gaussians) return;
     p.depth_order.v[g] = g;  // identity values for the depth sort
 
-    vec3 m = vec3(p.means.v[3 * g], p.means.v[3 * g + 1], p.means.v[3 * g + 2]);
+    vec3 m = Vec3View(p.means).v[g];
     mat3 R_view = mat3(p.viewmat[0], p.viewmat[4], p.viewmat[8],   // column-major: columns of R
                        p.viewmat[1], p.viewmat[5], p.viewmat[9],
                        p.viewmat[2], p.viewmat[6], p.viewmat[10]);
@@ -33,10 +33,10 @@ void main() {
     if (!(pv.z > p.near_plane)) { cull(g); return; }
 
     // 3D covariance R S S^T R^T from the normalized quaternion and exp(log scale)
-    vec4 q = vec4(p.quats.v[4 * g], p.quats.v[4 * g + 1], p.quats.v[4 * g + 2], p.quats.v[4 * g + 3]);
+    vec4 q = Vec4View(p.quats).v[g];
     q = q / length(q);
     mat3 Rq = quat_to_rotation(q);
-    vec3 s = exp(vec3(p.log_scales.v[3 * g], p.log_scales.v[3 * g + 1], p.log_scales.v[3 * g + 2]));
+    vec3 s = exp(Vec3View(p.log_scales).v[g]);
     mat3 M = Rq * mat3(s.x, 0, 0, 0, s.y, 0, 0, 0, s.z);
     mat3 cov_world = M * transpose(M);
     mat3 cov_view = R_view * cov_world * transpose(R_view);
@@ -85,23 +85,15 @@ void main() {
     uint K = p.sh_coeffs;
     uint nb = min((p.sh_degree + 1) * (p.sh_degree + 1), K);
     vec3 color = vec3(0.0);
-    for (uint k = 0; k < nb; k++) {
-        uint base = (g * K + k) * 3;
-        color += basis[k] * vec3(p.sh.v[base], p.sh.v[base + 1], p.sh.v[base + 2]);
-    }
+    Vec3View sh = Vec3View(p.sh);
+    for (uint k = 0; k < nb; k++) color += basis[k] * sh.v[g * K + k];
     color = max(color + 0.5, vec3(0.0));
 
-    p.xy.v[2 * g] = xy.x;
-    p.xy.v[2 * g + 1] = xy.y;
-    p.conic_opacity.v[4 * g] = conic.x;
-    p.conic_opacity.v[4 * g + 1] = conic.y;
-    p.conic_opacity.v[4 * g + 2] = conic.z;
-    p.conic_opacity.v[4 * g + 3] = opacity;
+    Vec2View(p.xy).v[g] = xy;
+    Vec4View(p.conic_opacity).v[g] = vec4(conic, opacity);
     p.depth.v[g] = pv.z;
-    p.color.v[3 * g] = color.x;
-    p.color.v[3 * g + 1] = color.y;
-    p.color.v[3 * g + 2] = color.z;
-    for (int i = 0; i < 4; i++) p.tile_rect.v[4 * g + i] = rect[i];
+    Vec3View(p.color).v[g] = color;
+    UVec4View(p.tile_rect).v[g] = rect;
     p.tiles_touched.v[g] = touched;
     p.depth_keys.v[g] = touched > 0 ? floatBitsToUint(pv.z) : 0x7fffffffu;
 }

@@ -82,7 +82,8 @@ void main() {
     // broadcast one register move: 237 -> 129 ms on a trained 31.5k scene at 256x192). No shared
     // memory and no barriers. `lanes` counts the lanes present: a workgroup smaller than a subgroup
     // fills only the low lanes.
-    uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
+    uvec2 range = UVec2View(p.tile_ranges).v[tile];
+    uint start = range.x, end = range.y;
     end = min(end, max(subgroupMax(last_max), start));
     uint lanes = subgroupBallotBitCount(subgroupBallot(true));
     for (uint batch_end = end; batch_end > start;) {
@@ -94,10 +95,9 @@ void main() {
         float my_reach = -1.0;
         if (gl_SubgroupInvocationID < count) {
             my_g = p.isect_gauss.v[batch_start + gl_SubgroupInvocationID];
-            my_xy = vec2(p.xy.v[2 * my_g], p.xy.v[2 * my_g + 1]);
-            my_co = vec4(p.conic_opacity.v[4 * my_g], p.conic_opacity.v[4 * my_g + 1],
-                         p.conic_opacity.v[4 * my_g + 2], p.conic_opacity.v[4 * my_g + 3]);
-            my_cd = vec4(p.color.v[3 * my_g], p.color.v[3 * my_g + 1], p.color.v[3 * my_g + 2], p.depth.v[my_g]);
+            my_xy = Vec2View(p.xy).v[my_g];
+            my_co = Vec4View(p.conic_opacity).v[my_g];
+            my_cd = vec4(Vec3View(p.color).v[my_g], p.depth.v[my_g]);
             my_reach = row_reach(my_co);
         }
         for (uint jj = count; jj > 0; jj--) {

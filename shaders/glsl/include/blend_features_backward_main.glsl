@@ -46,7 +46,8 @@ void main() {
             dl_df[r][c] = (inside && c < channels) ? b.dl_dfeatures.v[(channel_offset + c) * hw + pi] : 0.0;
     }
 
-    uint start = p.tile_ranges.v[2 * tile], end = p.tile_ranges.v[2 * tile + 1];
+    uvec2 range = UVec2View(p.tile_ranges).v[tile];
+    uint start = range.x, end = range.y;
     // Fed as blend.comp: each subgroup walks the list on its own, lane l loading the batch's l-th
     // Gaussian into registers and every lane taking them in order by broadcast; it stops once its
     // own pixels have saturated, as the forward pass does.
@@ -60,9 +61,8 @@ void main() {
         float my_reach = -1.0;  // past the end: reaches no row
         if (k < end) {
             my_g = p.isect_gauss.v[k];
-            my_xy = vec2(p.xy.v[2 * my_g], p.xy.v[2 * my_g + 1]);
-            my_co = vec4(p.conic_opacity.v[4 * my_g], p.conic_opacity.v[4 * my_g + 1],
-                         p.conic_opacity.v[4 * my_g + 2], p.conic_opacity.v[4 * my_g + 3]);
+            my_xy = Vec2View(p.xy).v[my_g];
+            my_co = Vec4View(p.conic_opacity).v[my_g];
             my_reach = row_reach(my_co);
         }
         uint count = min(lanes, end - batch);

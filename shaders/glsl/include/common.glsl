@@ -7,6 +7,15 @@
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer Floats { float v[]; };
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer Uints { uint v[]; };
 
+// Vector views of float and uint buffers in scalar layout (4-byte aligned, no padding), so that a
+// Gaussian's 2-4 consecutive values are one access per lane. On lavapipe every per-lane access is a
+// loop over the lanes whatever its width, so fewer, wider accesses are what a pass pays less for.
+layout(buffer_reference, scalar, buffer_reference_align = 4) buffer Vec2View { vec2 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) buffer Vec3View { vec3 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) buffer Vec4View { vec4 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) buffer UVec2View { uvec2 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) buffer UVec4View { uvec4 v[]; };
+
 // Dispatches over more than 65535 workgroups are split into a 2D grid by the host (gpu::dispatch_1d);
 // this linearizes the workgroup id again.
 uint linear_group_id() {

@@ -70,17 +70,17 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     b.grad_xy_views.v[g] += 1;
 
     // ---- recompute the forward quantities
-    vec3 m = vec3(p.means.v[3 * g], p.means.v[3 * g + 1], p.means.v[3 * g + 2]);
+    vec3 m = Vec3View(p.means).v[g];
     mat3 Rv = mat3(p.viewmat[0], p.viewmat[4], p.viewmat[8],
                    p.viewmat[1], p.viewmat[5], p.viewmat[9],
                    p.viewmat[2], p.viewmat[6], p.viewmat[10]);
     vec3 pv = Rv * m + vec3(p.viewmat[3], p.viewmat[7], p.viewmat[11]);
-    vec4 q_raw = vec4(p.quats.v[4 * g], p.quats.v[4 * g + 1], p.quats.v[4 * g + 2], p.quats.v[4 * g + 3]);
+    vec4 q_raw = Vec4View(p.quats).v[g];
     float q_norm = length(q_raw);
     vec4 q = q_raw / q_norm;
     float w = q.x, x = q.y, y = q.z, z = q.w;
     mat3 Rq = quat_to_rotation(q);
-    vec3 s = exp(vec3(p.log_scales.v[3 * g], p.log_scales.v[3 * g + 1], p.log_scales.v[3 * g + 2]));
+    vec3 s = exp(Vec3View(p.log_scales).v[g]);
     mat3 M = Rq * mat3(s.x, 0, 0, 0, s.y, 0, 0, 0, s.z);
     mat3 cov_world = M * transpose(M);
     mat3 cov_view = Rv * cov_world * transpose(Rv);
@@ -90,8 +90,9 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     bool free_x = abs(ux) <= lim_x, free_y = abs(uy) <= lim_y;
     float cux = clamp(ux, -lim_x, lim_x), cuy = clamp(uy, -lim_y, lim_y);
     mat3x2 J = mat3x2(p.fx * rz, 0.0, 0.0, p.fy * rz, -p.fx * cux * rz, -p.fy * cuy * rz);
-    vec3 conic = vec3(p.conic_opacity.v[4 * g], p.conic_opacity.v[4 * g + 1], p.conic_opacity.v[4 * g + 2]);
-    float opacity = p.conic_opacity.v[4 * g + 3];
+    vec4 conic_opacity = Vec4View(p.conic_opacity).v[g];
+    vec3 conic = conic_opacity.xyz;
+    float opacity = conic_opacity.w;
 
     vec3 dl_dpv = vec3(0.0);
     vec3 dl_dm = vec3(0.0);
@@ -106,21 +107,15 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     sh_basis(dir, p.sh_degree, r.basis);
     uint K = p.sh_coeffs;
     uint nb = min((p.sh_degree + 1) * (p.sh_degree + 1), K);
+    Vec3View sh = Vec3View(p.sh);
     vec3 raw = vec3(0.0);
-    for (uint k = 0; k < nb; k++) {
-        uint base = (g * K + k) * 3;
-        raw += r.basis[k] * vec3(p.sh.v[base], p.sh.v[base + 1], p.sh.v[base + 2]);
-    }
+    for (uint k = 0; k < nb; k++) raw += r.basis[k] * sh.v[g * K + k];
     // max(raw + 0.5, 0): no gradient where the clamp is active
     vec3 dl_draw = mix(vec3(0.0), dl_dcolor, greaterThanEqual(raw + 0.5, vec3(0.0)));
     vec3 basis_grad[16];
     sh_basis_grad(dir, p.sh_degree, basis_grad);
     vec3 dl_ddir = vec3(0.0);
-    for (uint k = 0; k < nb; k++) {
-        uint base = (g * K + k) * 3;
-        vec3 coeff = vec3(p.sh.v[base], p.sh.v[base + 1], p.sh.v[base + 2]);
-        dl_ddir += dot(dl_draw, coeff) * basis_grad[k];
-    }
+    for (uint k = 0; k < nb; k++) dl_ddir += dot(dl_draw, sh.v[g * K + k]) * basis_grad[k];
     dl_dm += (dl_ddir - dir * dot(dir, dl_ddir)) / dir_len;
 
     // ---- depth and 2D mean
