@@ -145,3 +145,14 @@ fn prefix_scan_matches_cpu_exclusive_scan() {
         }
     }
 }
+
+#[test]
+fn every_buffer_starts_16_byte_aligned() {
+    // the lane-serial sort and the loss's vec4 passes read uvec4s / vec4s from a buffer's start
+    let g = gpu();
+    let buffers: Vec<Buffer> =
+        (1..=9u64).map(|words| Buffer::new(&g, "odd", 4 * words + 4, MemoryKind::Device).unwrap()).collect();
+    for b in &buffers {
+        assert_eq!(b.address() % 16, 0, "buffer at {:#x} is not 16-byte aligned", b.address());
+    }
+}

@@ -84,7 +84,11 @@ impl Buffer {
                 None,
             )?
         };
-        let requirements = unsafe { device.get_buffer_memory_requirements(buffer) };
+        let mut requirements = unsafe { device.get_buffer_memory_requirements(buffer) };
+        // Every buffer starts 16-byte aligned, whatever the driver asks for, so that passes reading
+        // uvec4s or vec4s from a buffer's start (the sort's lane-serial shape, the loss's vec4
+        // passes) can rely on it.
+        requirements.alignment = requirements.alignment.max(16);
         let location = match kind {
             MemoryKind::Device => MemoryLocation::GpuOnly,
             MemoryKind::Upload => MemoryLocation::CpuToGpu,
