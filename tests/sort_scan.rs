@@ -4,7 +4,7 @@
 mod common;
 
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
-use cogeo::render::scan::{PrefixScan, SCAN_BLOCK};
+use cogeo::render::scan::{PrefixScan, ScanShape};
 use cogeo::render::sort::{RadixSort, SortShape, LANE_SERIAL_MAX_LANES};
 use cogeo::rng::Rng;
 use common::gpu;
@@ -126,22 +126,27 @@ fn partial_widths_and_degenerate_inputs(g: &cogeo::gpu::Gpu, sort: &mut RadixSor
 #[test]
 fn prefix_scan_matches_cpu_exclusive_scan() {
     let g = gpu();
-    let mut scan = PrefixScan::new(&g).unwrap();
-    let mut rng = Rng::new(9);
-    let b = SCAN_BLOCK as usize;
-    // sizes that need one, two and three levels
-    for &n in &[1usize, 3, b - 1, b, b + 1, b * b - 1, b * b + 5, 2_500_000] {
-        let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 100) as u32).collect();
-        scan.reserve(n as u64).unwrap();
-        let buf = Buffer::from_slice(&g, "scan data", &data).unwrap();
-        let mut rec = Recorder::new(&g).unwrap();
-        scan.record(&mut rec, &buf, n as u32);
-        rec.submit_and_wait().unwrap();
-        let got: Vec<u32> = buf.download(&g, n).unwrap();
-        let mut acc = 0u32;
-        for i in 0..n {
-            assert_eq!(got[i], acc, "n = {n}: mismatch at {i}");
-            acc += data[i];
+    assert_eq!(PrefixScan::new(&g).unwrap().shape(), ScanShape::for_device(g.info()));
+    for shape in [ScanShape::Tree, ScanShape::LaneSerial] {
+        let mut scan = PrefixScan::with_shape(&g, shape).unwrap();
+        let mut rng = Rng::new(9);
+        let b = shape.block() as usize;
+        // a lane's slice in the lane-serial shape: cut inside, at and past slices, off uvec4s
+        let slice = b / g.info().subgroup_size as usize;
+        // sizes that need one, two and three levels
+        for &n in &[1usize, 3, 5, slice - 1, slice + 2, b - 1, b, b + 1, b * 3 + 7, b * b - 1, b * b + 5, 2_500_000] {
+            let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 100) as u32).collect();
+            scan.reserve(n as u64).unwrap();
+            let buf = Buffer::from_slice(&g, "scan data", &data).unwrap();
+            let mut rec = Recorder::new(&g).unwrap();
+            scan.record(&mut rec, &buf, n as u32);
+            rec.submit_and_wait().unwrap();
+            let got: Vec<u32> = buf.download(&g, n).unwrap();
+            let mut acc = 0u32;
+            for i in 0..n {
+                assert_eq!(got[i], acc, "{shape:?}, n = {n}: mismatch at {i}");
+                acc += data[i];
+            }
         }
     }
 }
