@@ -14,8 +14,7 @@ void main() {
     uint row = (id.z * height + id.y) * width;
     TAPS(v)
 #define LOAD(p, k) { int p_ = (p); v##k = p_ >= 0 && p_ < int(width) ? src.v[row + uint(max(p_, 0))] : 0.0; }
-    LOAD(x0 - 5, 1) LOAD(x0 - 4, 2) LOAD(x0 - 3, 3) LOAD(x0 - 2, 4) LOAD(x0 - 1, 5)
-    LOAD(x0, 6) LOAD(x0 + 1, 7) LOAD(x0 + 2, 8) LOAD(x0 + 3, 9) LOAD(x0 + 4, 10)
+    PRIME(x0)
     for (int r = 0; r < RUN && x0 + r < int(width); r++) {
         SLIDE(v)
         LOAD(x0 + r + 5, 10)

@@ -5,10 +5,8 @@
 // consecutive words (`blocked` = 0) or each invocation copies `per` consecutive words (`blocked` = 1).
 #include "common.glsl"
 
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Words { uvec4 v[]; };
-
 layout(local_size_x = 256) in;
-layout(push_constant) uniform Push { Words src; Words dst; uint n; uint per; uint blocked; };
+layout(push_constant) uniform Push { UVec4s src; UVec4s dst; uint n; uint per; uint blocked; };
 
 void main() {
     uint block = linear_group_id() * 256 * per;

@@ -23,7 +23,7 @@ void main() {
     // vec4 j of the run's inputs, which start at x0 - 8
 #define LOAD(j, k) { int p_ = x0 - 8 + 4 * (j); bool in_ = p_ >= 0 && p_ < int(width); uint i_ = (row + uint(max(p_, 0))) / 4; \
         a##k = in_ ? t4.v[i_] : vec4(0.0); b##k = in_ ? t4.v[q + i_] : vec4(0.0); c##k = in_ ? t4.v[2 * q + i_] : vec4(0.0); }
-    LOAD(0, 1) LOAD(1, 2) LOAD(2, 3) LOAD(3, 4)
+    PRIME4
     for (int r4i = 0; r4i < RUN / 4 && x0 + 4 * r4i < int(width); r4i++) {
         SLIDE4(a) SLIDE4(b) SLIDE4(c)
         LOAD(r4i + 4, 4)

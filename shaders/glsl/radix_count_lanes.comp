@@ -10,7 +10,7 @@
 void count_lane_slice(uint start, uint end) {
     uint row = lane_row();
     for (uint d = 0; d < RADIX; d++) s_lane[row + d] = 0;
-    Uvec4s keys4 = Uvec4s(keys_in);
+    UVec4s keys4 = UVec4s(keys_in);
     uint i = start;
     for (; i + 4 <= end; i += 4) {
         uvec4 k = keys4.v[i / 4];
@@ -26,7 +26,7 @@ void main() {
     uint block = linear_group_id();
     if (block >= num_blocks) return;  // uniform over the workgroup
     uint start, end;
-    lane_slice(block, start, end);
+    lane_slice(block, BLOCK_KEYS, gl_WorkGroupSize.x, n, start, end);
     count_lane_slice(start, end);
     barrier();
     uint lanes = gl_WorkGroupSize.x;

@@ -18,9 +18,9 @@ void main() {
     }
     barrier();
     uint start, end;
-    lane_slice(block, start, end);
+    lane_slice(block, BLOCK_KEYS, gl_WorkGroupSize.x, n, start, end);
     uint row = lane_row();
-    Uvec4s keys4 = Uvec4s(keys_in), values4 = Uvec4s(values_in);
+    UVec4s keys4 = UVec4s(keys_in), values4 = UVec4s(values_in);
     uint i = start;
     for (; i + 4 <= end; i += 4) {
         uvec4 k = keys4.v[i / 4], v = values4.v[i / 4];

@@ -9,8 +9,8 @@ void main() {
     if (block * BLOCK >= n) return;
     uint add = block_sums.v[block];
     uint start, end;
-    lane_slice(block, start, end);
-    Uvec4Words words = Uvec4Words(data);
+    lane_slice(block, BLOCK, gl_WorkGroupSize.x, n, start, end);
+    UVec4s words = UVec4s(data);
     uint i = start;
     for (; i + 4 <= end; i += 4) words.v[i / 4] += add;
     for (; i < end; i++) data.v[i] += add;

@@ -12,8 +12,8 @@ void main() {
     uint block = linear_group_id();
     if (block * BLOCK >= n) return;  // uniform over the workgroup
     uint start, end;
-    lane_slice(block, start, end);
-    Uvec4Words words = Uvec4Words(data);
+    lane_slice(block, BLOCK, gl_WorkGroupSize.x, n, start, end);
+    UVec4s words = UVec4s(data);
     uint i = start, total = 0;
     for (; i + 4 <= end; i += 4) {
         uvec4 v = words.v[i / 4];

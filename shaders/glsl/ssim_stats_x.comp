@@ -17,8 +17,7 @@ void main() {
     TAPS(xs) TAPS(ys)  // x (render) and y (target) under the window
 #define LOAD(p, k) { int p_ = (p); bool in_ = p_ >= 0 && p_ < int(width); uint i_ = row + uint(max(p_, 0)); \
         xs##k = in_ ? render.v[i_] : 0.0; ys##k = in_ ? target.v[i_] : 0.0; }
-    LOAD(x0 - 5, 1) LOAD(x0 - 4, 2) LOAD(x0 - 3, 3) LOAD(x0 - 2, 4) LOAD(x0 - 1, 5)
-    LOAD(x0, 6) LOAD(x0 + 1, 7) LOAD(x0 + 2, 8) LOAD(x0 + 3, 9) LOAD(x0 + 4, 10)
+    PRIME(x0)
     for (int r = 0; r < RUN && x0 + r < int(width); r++) {
         SLIDE(xs) SLIDE(ys)
         LOAD(x0 + r + 5, 10)

@@ -18,8 +18,7 @@ void main() {
     TAPS(xs) TAPS(ys)  // x (render) and y (target) under the window
 #define LOAD(p, k) { int p_ = (p); bool in_ = p_ >= 0 && p_ < int(height); uint i_ = column + uint(max(p_, 0)) * width; \
         xs##k = in_ ? render.v[i_] : 0.0; ys##k = in_ ? target.v[i_] : 0.0; }
-    LOAD(y0 - 5, 1) LOAD(y0 - 4, 2) LOAD(y0 - 3, 3) LOAD(y0 - 2, 4) LOAD(y0 - 1, 5)
-    LOAD(y0, 6) LOAD(y0 + 1, 7) LOAD(y0 + 2, 8) LOAD(y0 + 3, 9) LOAD(y0 + 4, 10)
+    PRIME(y0)
     for (int r = 0; r < RUN && y0 + r < int(height); r++) {
         SLIDE(xs) SLIDE(ys)
         LOAD(y0 + r + 5, 10)

@@ -21,7 +21,7 @@ void main() {
 #define LOAD(j, k) { int p_ = x0 - 8 + 4 * (j); bool in_ = p_ >= 0 && p_ < int(width); uint i_ = (row + uint(max(p_, 0))) / 4; \
         mx##k = in_ ? s4.v[i_] : vec4(0.0); my##k = in_ ? s4.v[q + i_] : vec4(0.0); xx##k = in_ ? s4.v[2 * q + i_] : vec4(0.0); \
         yy##k = in_ ? s4.v[3 * q + i_] : vec4(0.0); xy##k = in_ ? s4.v[4 * q + i_] : vec4(0.0); }
-    LOAD(0, 1) LOAD(1, 2) LOAD(2, 3) LOAD(3, 4)
+    PRIME4
     for (int r4 = 0; r4 < RUN / 4 && x0 + 4 * r4 < int(width); r4++) {
         SLIDE4(mx) SLIDE4(my) SLIDE4(xx) SLIDE4(yy) SLIDE4(xy)
         LOAD(r4 + 4, 4)

@@ -16,6 +16,21 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) buffer Vec4View { v
 layout(buffer_reference, scalar, buffer_reference_align = 4) buffer UVec2View { uvec2 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) buffer UVec4View { uvec4 v[]; };
 
+// Whole buffers read as 16-byte words from their start (every gpu::Buffer starts 16-byte aligned):
+// the copy-bandwidth reference, the loss's vec4 passes, the lane-serial sort and scan.
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4s { vec4 v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer UVec4s { uvec4 v[]; };
+
+// The lane-serial shape (the sort's and the scan's on CPU drivers): lane i of a workgroup of `lanes`
+// owns the i-th of their equal, contiguous slices of the `block_size` elements of block `block`,
+// clipped to n. `lanes` is the caller's gl_WorkGroupSize.x: read here, before the shader declares
+// its workgroup size, gl_WorkGroupSize does not hold that size (the sort and scan tests failed).
+void lane_slice(uint block, uint block_size, uint lanes, uint n, out uint start, out uint end) {
+    uint per_lane = block_size / lanes;
+    start = min(block * block_size + gl_LocalInvocationID.x * per_lane, n);
+    end = min(start + per_lane, n);
+}
+
 // Dispatches over more than 65535 workgroups are split into a 2D grid by the host (gpu::dispatch_1d);
 // this linearizes the workgroup id again.
 uint linear_group_id() {

@@ -8,16 +8,9 @@
 
 const uint MAX_LANES = 16;  // render::sort::LANE_SERIAL_MAX_LANES
 
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Uvec4s { uvec4 v[]; };
-
 shared uint s_lane[MAX_LANES * RADIX];  // s_lane[lane * RADIX + digit]
 
 uint lane_row() { return gl_LocalInvocationID.x * RADIX; }
 
-// This lane's slice of the block: BLOCK_KEYS / lanes keys, a multiple of 4 so the slice starts on a
-// uvec4 (the keys' address is 16-byte aligned, checked by the host).
-void lane_slice(uint block, out uint start, out uint end) {
-    uint per_lane = BLOCK_KEYS / gl_WorkGroupSize.x;
-    start = min(block * BLOCK_KEYS + gl_LocalInvocationID.x * per_lane, n);
-    end = min(start + per_lane, n);
-}
+// A lane's slice (lane_slice in common.glsl) is BLOCK_KEYS / lanes keys, a multiple of 4, so it
+// starts on a uvec4 (the keys' address is 16-byte aligned, checked by the host).

@@ -7,11 +7,3 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const uint BLOCK = 8192;
 layout(push_constant) uniform Push { Uints data; Uints block_sums; uint n; };
 
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Uvec4Words { uvec4 v[]; };
-
-// This lane's slice of the block.
-void lane_slice(uint block, out uint start, out uint end) {
-    uint per_lane = BLOCK / gl_WorkGroupSize.x;
-    start = min(block * BLOCK + gl_LocalInvocationID.x * per_lane, n);
-    end = min(start + per_lane, n);
-}

@@ -19,6 +19,11 @@ const float W[11] = float[11](1.028380084e-03, 7.598758135e-03, 3.600077213e-02,
     v##6 = v##7; v##7 = v##8; v##8 = v##9; v##9 = v##10;
 #define WINDOW(v) (W[0] * v##0 + W[1] * v##1 + W[2] * v##2 + W[3] * v##3 + W[4] * v##4 + W[5] * v##5 + \
     W[6] * v##6 + W[7] * v##7 + W[8] * v##8 + W[9] * v##9 + W[10] * v##10)
+// The window before a run's first output at `origin`: inputs origin - 5 .. origin + 4 into taps
+// 1..10, through the shader's own LOAD(position, tap); each step then slides and loads tap 10.
+#define PRIME(origin) LOAD((origin) - 5, 1) LOAD((origin) - 4, 2) LOAD((origin) - 3, 3) \
+    LOAD((origin) - 2, 4) LOAD((origin) - 1, 5) LOAD((origin), 6) LOAD((origin) + 1, 7) \
+    LOAD((origin) + 2, 8) LOAD((origin) + 3, 9) LOAD((origin) + 4, 10)
 #define WINDOW_OF_PRODUCTS(v, u) (W[0] * (v##0 * u##0) + W[1] * (v##1 * u##1) + W[2] * (v##2 * u##2) + \
     W[3] * (v##3 * u##3) + W[4] * (v##4 * u##4) + W[5] * (v##5 * u##5) + W[6] * (v##6 * u##6) + \
     W[7] * (v##7 * u##7) + W[8] * (v##8 * u##8) + W[9] * (v##9 * u##9) + W[10] * (v##10 * u##10))
@@ -33,6 +38,8 @@ vec4 window4(vec4 v0, vec4 v1, vec4 v2, vec4 v3, vec4 v4) {
 #define TAPS4(v) vec4 v##0, v##1, v##2, v##3, v##4;
 #define SLIDE4(v) v##0 = v##1; v##1 = v##2; v##2 = v##3; v##3 = v##4;
 #define WINDOW4(v) window4(v##0, v##1, v##2, v##3, v##4)
+// The first four vec4s of a run's inputs into v1..v4, through the shader's LOAD(vec4 index, slot).
+#define PRIME4 LOAD(0, 1) LOAD(1, 2) LOAD(2, 3) LOAD(3, 4)
 
 // RUN is chosen per device (train/loss.rs): 64 on CPU devices, where loads are per-lane gathers and
 // each run's 10 extra inputs are overhead; 8 on GPUs, which want many invocations in flight.
@@ -69,5 +76,4 @@ SSIM_TERMS(vec4)
 // y the lanes already read consecutive floats, and vec4s of 4 columns measured 1.5x slower there.
 // So there every pass runs along the other axis (ssim_stats_y, ssim_terms_x, blur_y,
 // loss_grad_x), the two that read the most planes along x. Runs are multiples of 4 outputs in the
-// vec4 passes.
-layout(buffer_reference, std430, buffer_reference_align = 16) buffer Vec4s { vec4 v[]; };
+// vec4 passes (Vec4s in common.glsl).
