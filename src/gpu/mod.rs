@@ -40,6 +40,12 @@ pub struct DeviceInfo {
 }
 
 impl DeviceInfo {
+    /// A CPU implementation (lavapipe): passes that pick a shape per device (blend layout, loss run,
+    /// lane-serial sort and scan) take their CPU shapes here.
+    pub fn is_cpu(&self) -> bool {
+        self.device_type == device_type_name(vk::PhysicalDeviceType::CPU)
+    }
+
     pub fn summary(&self) -> String {
         format!(
             "[{}] {} ({}, Vulkan {}, {}): subgroup {}, shared memory {} KiB, storage binding {} MiB, \

@@ -215,7 +215,7 @@ impl BlendLayout {
     /// the color backward with 4 x 2, 8 x 1, 8 x 2, 16 x 1 and 16 x 2 pixels 201/206/123/155/95-161
     /// (one pixel per invocation: 437 and 895). GPUs keep a pixel per invocation until measured there.
     pub fn for_device(info: &crate::gpu::DeviceInfo) -> BlendLayout {
-        if info.device_type == "CPU" {
+        if info.is_cpu() {
             BlendLayout { forward_rows: 16, backward_rows: 16, backward_cols: 2, feature_rows: 4 }
         } else {
             BlendLayout::PIXEL

@@ -29,7 +29,7 @@ pub enum ScanShape {
 
 impl ScanShape {
     pub fn for_device(info: &crate::gpu::DeviceInfo) -> ScanShape {
-        if info.device_type == "CPU" && info.subgroup_size <= SCAN_LANES_MAX {
+        if info.is_cpu() && info.subgroup_size <= SCAN_LANES_MAX {
             ScanShape::LaneSerial
         } else {
             ScanShape::Tree

@@ -62,7 +62,7 @@ impl SortShape {
     /// binary alternating, 3 runs each): 1M pairs ballot 41.4-42.0 ms, lane-serial 19.4-20.7 ms;
     /// 4M 167-170 against 97-98 ms; 16M 656-680 against 380-382 ms.
     pub fn for_device(info: &crate::gpu::DeviceInfo) -> SortShape {
-        if info.device_type == "CPU" && info.subgroup_size <= LANE_SERIAL_MAX_LANES {
+        if info.is_cpu() && info.subgroup_size <= LANE_SERIAL_MAX_LANES {
             SortShape::LaneSerial
         } else {
             SortShape::Ballot

@@ -97,7 +97,7 @@ fn grid_runs_along_y(run: u32, width: u32, height: u32, planes: u32) -> [u32; 3]
 /// 137 ms; in a later session runs of 16 124 ms, runs of 32 116 ms; with the vec4 passes of aligned
 /// rows, runs of 32 32.8 / 32.9 / 34.8 ms against runs of 64 30.5 / 31.5 / 30.9 ms (alternating).
 fn run_for_device(info: &crate::gpu::DeviceInfo) -> u32 {
-    if info.device_type == "CPU" {
+    if info.is_cpu() {
         64
     } else {
         8
