@@ -81,12 +81,11 @@ void main() {
     // view-dependent color
     vec3 dir = normalize(m - vec3(p.campos[0], p.campos[1], p.campos[2]));
     float basis[16];
-    sh_basis(dir, p.sh_degree, basis);
+    sh_basis(dir, SH_DEGREE, basis);
     uint K = p.sh_coeffs;
-    uint nb = min((p.sh_degree + 1) * (p.sh_degree + 1), K);
     vec3 color = vec3(0.0);
     Vec3View sh = Vec3View(p.sh);
-    for (uint k = 0; k < nb; k++) color += basis[k] * sh.v[g * K + k];
+    for (uint k = 0; k < SH_BANDS; k++) color += basis[k] * sh.v[g * K + k];
     color = max(color + 0.5, vec3(0.0));
 
     Vec2View(p.xy).v[g] = xy;

@@ -5,6 +5,7 @@
 
 use super::features::FeaturePipelines;
 use super::params::RenderParams;
+use super::sh_degree::ShDegreePipelines;
 use super::{BlendLayout, SceneBuffers};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
@@ -139,7 +140,7 @@ struct ViewGradients {
 pub struct Backward {
     gpu: Gpu,
     blend: ComputePipeline,
-    project: ComputePipeline,
+    project: ShDegreePipelines,
     features: FeaturePipelines,
     params: Buffer,
     view: Option<ViewGradients>,
@@ -167,7 +168,7 @@ impl Backward {
         Ok(Backward {
             gpu: gpu.clone(),
             blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, cols, 16 / cols, 16 / rows])?,
-            project: ComputePipeline::new(gpu, "project_backward", project)?,
+            project: ShDegreePipelines::new("project_backward", project),
             features: FeaturePipelines::new("blend_features_backward", features, feature_rows),
             params: Buffer::new(
                 gpu,
@@ -291,7 +292,8 @@ impl Backward {
             rec.mark("blend backward");
         }
         if project {
-            rec.dispatch(&self.project, &push, dispatch_1d(frame.num_gaussians.div_ceil(256)));
+            self.project.prepare(&self.gpu, frame.sh_degree)?;
+            rec.dispatch(self.project.get(frame.sh_degree), &push, dispatch_1d(frame.num_gaussians.div_ceil(256)));
             rec.mark("project backward");
         }
         if let (Some(_), Some(_)) = (upstream.features, grads.features.as_ref()) {

@@ -8,6 +8,7 @@ mod features;
 pub mod params;
 pub mod reference;
 pub mod scan;
+pub(crate) mod sh_degree;
 pub mod sort;
 
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Recorder};
@@ -15,6 +16,7 @@ use crate::scene::{Camera, GaussianScene};
 use crate::shaders;
 use anyhow::{bail, Result};
 use features::FeaturePipelines;
+use sh_degree::ShDegreePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
 use sort::RadixSort;
 
@@ -170,7 +172,7 @@ struct ImageBuffers {
 /// Owner of the forward-pass pipelines and their working memory.
 pub struct Rasterizer {
     gpu: Gpu,
-    project: ComputePipeline,
+    project: ShDegreePipelines,
     gather: ComputePipeline,
     emit: ComputePipeline,
     ranges: ComputePipeline,
@@ -243,7 +245,7 @@ impl Rasterizer {
         let rows = layout.forward_rows;
         Ok(Rasterizer {
             gpu: gpu.clone(),
-            project: ComputePipeline::new(gpu, "project", shaders::PROJECT)?,
+            project: ShDegreePipelines::new("project", shaders::PROJECT),
             gather: ComputePipeline::new(gpu, "gather_counts", shaders::GATHER_COUNTS)?,
             emit: ComputePipeline::new(gpu, "emit_intersections", shaders::EMIT_INTERSECTIONS)?,
             ranges: ComputePipeline::new(gpu, "tile_ranges", shaders::TILE_RANGES)?,
@@ -369,6 +371,8 @@ impl Rasterizer {
         self.reserve_gaussians(n)?;
         self.reserve_image(width, height, feature_dim)?;
         self.blend_features.prepare(&self.gpu, feature_dim)?;
+        let degree = settings.sh_degree.unwrap_or(scene.sh_degree).min(scene.sh_degree);
+        self.project.prepare(&self.gpu, degree)?;
         let tiles_x = width.div_ceil(TILE);
         let tiles_y = height.div_ceil(TILE);
         let num_tiles = tiles_x * tiles_y;
@@ -381,8 +385,7 @@ impl Rasterizer {
 
         // submission 1: project, depth sort, scan of touched counts in depth order
         let mut rec = Recorder::with_timestamps(&self.gpu, settings.timestamps)?;
-        rec.dispatch(&self.project, &push, dispatch_1d(n.div_ceil(256)));
-        let degree = settings.sh_degree.unwrap_or(scene.sh_degree).min(scene.sh_degree);
+        rec.dispatch(self.project.get(degree), &push, dispatch_1d(n.div_ceil(256)));
         rec.mark_moved("project", moved::project(n, degree));
         let in_alt =
             self.sort.record(&mut rec, &frame.depth_keys, &frame.depth_order, &isect.tile_alt, &isect.gauss_alt, n, 31);

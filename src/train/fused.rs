@@ -7,7 +7,8 @@
 //! apart only for the trust-region step, which needs each tensor's whole update before applying it.
 
 use super::adam::{AdamStep, Moments};
-use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
+use crate::gpu::{dispatch_1d, Buffer, Gpu, MemoryKind, Recorder};
+use crate::render::sh_degree::ShDegreePipelines;
 use crate::render::SceneBuffers;
 use crate::shaders;
 use anyhow::Result;
@@ -49,7 +50,8 @@ pub fn bytes_per_gaussian(sh_stepped: u32) -> u64 {
 }
 
 pub struct ProjectBackwardAdam {
-    pipeline: ComputePipeline,
+    gpu: Gpu,
+    pipelines: ShDegreePipelines,
     params: Buffer,
 }
 
@@ -58,7 +60,8 @@ impl ProjectBackwardAdam {
     pub fn new(gpu: &Gpu, cas: bool) -> Result<ProjectBackwardAdam> {
         let spirv = if cas { shaders::PROJECT_BACKWARD_ADAM_CAS } else { shaders::PROJECT_BACKWARD_ADAM };
         Ok(ProjectBackwardAdam {
-            pipeline: ComputePipeline::new(gpu, "project_backward_adam", spirv)?,
+            gpu: gpu.clone(),
+            pipelines: ShDegreePipelines::new("project_backward_adam", spirv),
             params: Buffer::new(
                 gpu,
                 "fused adam params",
@@ -70,17 +73,19 @@ impl ProjectBackwardAdam {
 
     /// Records Adam step `step` (from 1) of every group of `scene`, with the gradients of the view
     /// whose blend backward was recorded last (`render_params` and `backward_params` are the
-    /// rasterizer's and the backward's parameter blocks of that view). `regularizer` = the MCMC
+    /// rasterizer's and the backward's parameter blocks of that view, `sh_degree` the degree that
+    /// view was rendered with, its `RenderParams::sh_degree`). `regularizer` = the MCMC
     /// (opacity, scale) weights, zero when off. Only the first `sh_stepped` SH coefficients per
     /// channel are stepped: the caller guarantees the others have zero moments and get no gradient
     /// (bands not rendered yet), so a step would leave them unchanged. The constants go to one
     /// host-visible block: one recording per submission.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
-        &self,
+        &mut self,
         rec: &mut Recorder,
         render_params: &Buffer,
         backward_params: &Buffer,
+        sh_degree: u32,
         scene: &SceneBuffers,
         groups: &Groups,
         regularizer: (f32, f32),
@@ -101,7 +106,8 @@ impl ProjectBackwardAdam {
         };
         self.params.write_pod(&params)?;
         let push = [render_params.address(), backward_params.address(), self.params.address()];
-        rec.dispatch(&self.pipeline, &push, dispatch_1d(n.div_ceil(256)));
+        self.pipelines.prepare(&self.gpu, sh_degree)?;
+        rec.dispatch(self.pipelines.get(sh_degree), &push, dispatch_1d(n.div_ceil(256)));
         Ok(())
     }
 }

@@ -358,7 +358,7 @@ impl Trainer {
             (0.0, 0.0)
         };
         if fused {
-            self.record_fused_step(&mut rec, regularizer)?;
+            self.record_fused_step(&mut rec, frame.params.sh_degree, regularizer)?;
         } else {
             self.record_adam_apart(&mut rec, mcmc, regularizer)?;
         }
@@ -397,7 +397,7 @@ impl Trainer {
     }
 
     /// Projection backward and Adam of every group in one pass (train/fused.rs).
-    fn record_fused_step(&mut self, rec: &mut Recorder, regularizer: (f32, f32)) -> Result<()> {
+    fn record_fused_step(&mut self, rec: &mut Recorder, sh_degree: u32, regularizer: (f32, f32)) -> Result<()> {
         let (s, m, f) = (&self.scene, &self.moments, self.frozen);
         let group = |moments, lr, lr_tail, frozen| GroupStep { moments, lr, lr_tail, frozen };
         let (sh_dc, sh_rest) = self.sh_lrs();
@@ -410,7 +410,7 @@ impl Trainer {
         ];
         let params = self.raster.params_buffer();
         let stepped = self.sh_stepped;
-        self.fused.record(rec, params, self.backward.params(), s, &groups, regularizer, self.step, stepped)?;
+        self.fused.record(rec, params, self.backward.params(), sh_degree, s, &groups, regularizer, self.step, stepped)?;
         rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped));
         Ok(())
     }

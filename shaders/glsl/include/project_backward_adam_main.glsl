@@ -73,10 +73,16 @@ void main() {
         // Coefficients at and above sh_stepped belong to bands never rendered yet (the degree grows
         // during training): zero gradient and zero moments, where an Adam step changes nothing.
         uint K = p.sh_coeffs, stepped = a.sh_stepped;
-        for (uint k = 0; k < stepped; k++) {
-            vec3 grad = k < d.bands ? d.basis[k] * d.color_raw : vec3(0.0);
+        // The rendered bands first, in a loop of constant length (the basis stays in registers),
+        // then those stepped before at a higher degree, if any, with zero gradient.
+        for (uint k = 0; k < SH_BANDS; k++) {
+            if (k >= stepped) break;
+            vec3 grad = d.bands > 0u ? d.basis[k] * d.color_raw : vec3(0.0);  // 0 when culled
             float rate = k == 0 ? s.lr : s.lr_tail;
             for (uint c = 0; c < 3; c++) step_element(param, m, v, (g * K + k) * 3 + c, grad[c], s, rate);
+        }
+        for (uint k = SH_BANDS; k < stepped; k++) {
+            for (uint c = 0; c < 3; c++) step_element(param, m, v, (g * K + k) * 3 + c, 0.0, s, s.lr_tail);
         }
     }
 }

@@ -20,7 +20,7 @@ struct ParamGrads {
     float opacity_logit;
     vec3 color_raw;   // dL/d(raw SH color) (zero where the color clamp is active)
     float basis[16];
-    uint bands;       // SH coefficients in use at the rendered degree
+    uint bands;       // SH coefficients in use at the rendered degree (SH_BANDS), 0 when culled
 };
 
 // d(basis_k)/d(direction), rows k = 0..15, for the unit direction d.
@@ -104,18 +104,17 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     vec3 dir_raw = m - vec3(p.campos[0], p.campos[1], p.campos[2]);
     float dir_len = length(dir_raw);
     vec3 dir = dir_raw / dir_len;
-    sh_basis(dir, p.sh_degree, r.basis);
+    sh_basis(dir, SH_DEGREE, r.basis);
     uint K = p.sh_coeffs;
-    uint nb = min((p.sh_degree + 1) * (p.sh_degree + 1), K);
     Vec3View sh = Vec3View(p.sh);
     vec3 raw = vec3(0.0);
-    for (uint k = 0; k < nb; k++) raw += r.basis[k] * sh.v[g * K + k];
+    for (uint k = 0; k < SH_BANDS; k++) raw += r.basis[k] * sh.v[g * K + k];
     // max(raw + 0.5, 0): no gradient where the clamp is active
     vec3 dl_draw = mix(vec3(0.0), dl_dcolor, greaterThanEqual(raw + 0.5, vec3(0.0)));
     vec3 basis_grad[16];
-    sh_basis_grad(dir, p.sh_degree, basis_grad);
+    sh_basis_grad(dir, SH_DEGREE, basis_grad);
     vec3 dl_ddir = vec3(0.0);
-    for (uint k = 0; k < nb; k++) dl_ddir += dot(dl_draw, sh.v[g * K + k]) * basis_grad[k];
+    for (uint k = 0; k < SH_BANDS; k++) dl_ddir += dot(dl_draw, sh.v[g * K + k]) * basis_grad[k];
     dl_dm += (dl_ddir - dir * dot(dir, dl_ddir)) / dir_len;
 
     // ---- depth and 2D mean
@@ -170,6 +169,6 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     r.quat = dl_dq;
     r.opacity_logit = dl_dlogit;
     r.color_raw = dl_draw;
-    r.bands = nb;
+    r.bands = SH_BANDS;
     return true;
 }

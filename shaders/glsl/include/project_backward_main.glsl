@@ -14,7 +14,7 @@ void main() {
     ParamGrads d;
     if (!parameter_grads(p, b, g, d)) return;
     uint K = p.sh_coeffs;
-    for (uint k = 0; k < d.bands; k++) {
+    for (uint k = 0; k < SH_BANDS; k++) {
         uint base = (g * K + k) * 3;
         b.grad_sh.v[base] += d.basis[k] * d.color_raw.x;
         b.grad_sh.v[base + 1] += d.basis[k] * d.color_raw.y;

@@ -1,4 +1,13 @@
 // Real spherical harmonics up to degree 3 in the INRIA basis order (conventions.md).
+
+// The SH degree a pipeline renders with: the frame's RenderParams::sh_degree, to which the host
+// specializes the pipeline (render::sh_degree). As a constant, the bands above it compile away
+// and the basis loops unroll into registers; lavapipe would otherwise run every band's code with
+// its lanes masked off (it runs both sides of a branch) and keep the basis arrays in memory.
+layout(constant_id = 0) const uint SH_DEGREE = 3;
+// Basis functions in use, (SH_DEGREE + 1)^2; the host renders at most the stored degree, so the
+// scene holds at least this many coefficients per channel.
+const uint SH_BANDS = (SH_DEGREE + 1) * (SH_DEGREE + 1);
 const float SH_C0 = 0.28209479177387814;
 const float SH_C1 = 0.4886025119029199;
 const float SH_C2[5] = float[5](1.0925484305920792, -1.0925484305920792, 0.31539156525252005,
