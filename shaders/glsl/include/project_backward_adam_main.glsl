@@ -45,7 +45,10 @@ void main() {
     if ((frozen & 1u) == 0u) {
         Floats param = a.means, m = a.m_means, v = a.v_means;
         AdamStep s = a.step_means;
-        for (uint i = 0; i < 3; i++) step_element(param, m, v, 3 * g + i, d.mean[i], s, s.lr);
+        for (uint i = 0; i < 3; i++) {
+            uint e = 3 * g + i;
+            param.v[e] = d.mean_value[i] - adam_update_value(d.mean[i], m, v, e, s, s.lr);
+        }
     }
     if ((frozen & 2u) == 0u) {
         Floats param = a.log_scales, m = a.m_log_scales, v = a.v_log_scales;
@@ -53,19 +56,25 @@ void main() {
         float weight = a.scale_reg;
         for (uint i = 0; i < 3; i++) {
             uint e = 3 * g + i;
-            step_element(param, m, v, e, d.log_scale[i] + weight * exp(param.v[e]), s, s.lr);
+            float value = d.log_scale_value[i];
+            param.v[e] = value - adam_update_value(d.log_scale[i] + weight * exp(value), m, v, e, s, s.lr);
         }
     }
     if ((frozen & 4u) == 0u) {
         Floats param = a.quats, m = a.m_quats, v = a.v_quats;
         AdamStep s = a.step_quats;
-        for (uint i = 0; i < 4; i++) step_element(param, m, v, 4 * g + i, d.quat[i], s, s.lr);
+        for (uint i = 0; i < 4; i++) {
+            uint e = 4 * g + i;
+            param.v[e] = d.quat_value[i] - adam_update_value(d.quat[i], m, v, e, s, s.lr);
+        }
     }
     if ((frozen & 8u) == 0u) {
         Floats param = a.opacity_logits;
-        float sig = 1.0 / (1.0 + exp(-param.v[g]));
+        float value = param.v[g];
+        float sig = 1.0 / (1.0 + exp(-value));
         float reg = a.opacity_reg * sig * (1.0 - sig);
-        step_element(param, a.m_opacity, a.v_opacity, g, d.opacity_logit + reg, a.step_opacity, a.step_opacity.lr);
+        AdamStep s = a.step_opacity;
+        param.v[g] = value - adam_update_value(d.opacity_logit + reg, a.m_opacity, a.v_opacity, g, s, s.lr);
     }
     if ((frozen & 16u) == 0u) {
         Floats param = a.sh, m = a.m_sh, v = a.v_sh;
@@ -79,7 +88,11 @@ void main() {
             if (k >= stepped) break;
             vec3 grad = d.bands > 0u ? d.basis[k] * d.color_raw : vec3(0.0);  // 0 when culled
             float rate = k == 0 ? s.lr : s.lr_tail;
-            for (uint c = 0; c < 3; c++) step_element(param, m, v, (g * K + k) * 3 + c, grad[c], s, rate);
+            for (uint c = 0; c < 3; c++) {
+                uint e = (g * K + k) * 3 + c;
+                float value = k == 0 ? d.dc_value[c] : param.v[e];  // k is a constant once unrolled
+                param.v[e] = value - adam_update_value(grad[c], m, v, e, s, rate);
+            }
         }
         for (uint k = SH_BANDS; k < stepped; k++) {
             for (uint c = 0; c < 3; c++) step_element(param, m, v, (g * K + k) * 3 + c, 0.0, s, s.lr_tail);

@@ -21,6 +21,12 @@ struct ParamGrads {
     vec3 color_raw;   // dL/d(raw SH color) (zero where the color clamp is active)
     float basis[16];
     uint bands;       // SH coefficients in use at the rendered degree (SH_BANDS), 0 when culled
+    // The Gaussian's stored mean, log scales, quaternion and DC coefficients, read once here
+    // whether or not the view culled it, so that the fused Adam step need not read them again.
+    vec3 mean_value;
+    vec3 log_scale_value;
+    vec4 quat_value;
+    vec3 dc_value;
 };
 
 // d(basis_k)/d(direction), rows k = 0..15, for the unit direction d.
@@ -57,6 +63,11 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     r.opacity_logit = 0.0;
     r.color_raw = vec3(0.0);
     r.bands = 0;
+    uint K = p.sh_coeffs;
+    r.mean_value = Vec3View(p.means).v[g];
+    r.log_scale_value = Vec3View(p.log_scales).v[g];
+    r.quat_value = Vec4View(p.quats).v[g];
+    r.dc_value = Vec3View(p.sh).v[g * K];
     if (p.tiles_touched.v[g] == 0) return false;  // culled or off-screen: no gradient
 
     vec2 dl_dxy = vec2(grad_read(b.grad_xy, 2 * g), grad_read(b.grad_xy, 2 * g + 1));
@@ -70,17 +81,17 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     b.grad_xy_views.v[g] += 1;
 
     // ---- recompute the forward quantities
-    vec3 m = Vec3View(p.means).v[g];
+    vec3 m = r.mean_value;
     mat3 Rv = mat3(p.viewmat[0], p.viewmat[4], p.viewmat[8],
                    p.viewmat[1], p.viewmat[5], p.viewmat[9],
                    p.viewmat[2], p.viewmat[6], p.viewmat[10]);
     vec3 pv = Rv * m + vec3(p.viewmat[3], p.viewmat[7], p.viewmat[11]);
-    vec4 q_raw = Vec4View(p.quats).v[g];
+    vec4 q_raw = r.quat_value;
     float q_norm = length(q_raw);
     vec4 q = q_raw / q_norm;
     float w = q.x, x = q.y, y = q.z, z = q.w;
     mat3 Rq = quat_to_rotation(q);
-    vec3 s = exp(Vec3View(p.log_scales).v[g]);
+    vec3 s = exp(r.log_scale_value);
     mat3 M = Rq * mat3(s.x, 0, 0, 0, s.y, 0, 0, 0, s.z);
     mat3 cov_world = M * transpose(M);
     mat3 cov_view = Rv * cov_world * transpose(Rv);
@@ -105,16 +116,15 @@ bool parameter_grads(RenderParams p, BackwardParams b, uint g, out ParamGrads r)
     float dir_len = length(dir_raw);
     vec3 dir = dir_raw / dir_len;
     sh_basis(dir, SH_DEGREE, r.basis);
-    uint K = p.sh_coeffs;
     Vec3View sh = Vec3View(p.sh);
-    vec3 raw = vec3(0.0);
-    for (uint k = 0; k < SH_BANDS; k++) raw += r.basis[k] * sh.v[g * K + k];
+    vec3 raw = r.basis[0] * r.dc_value;
+    for (uint k = 1; k < SH_BANDS; k++) raw += r.basis[k] * sh.v[g * K + k];
     // max(raw + 0.5, 0): no gradient where the clamp is active
     vec3 dl_draw = mix(vec3(0.0), dl_dcolor, greaterThanEqual(raw + 0.5, vec3(0.0)));
     vec3 basis_grad[16];
     sh_basis_grad(dir, SH_DEGREE, basis_grad);
     vec3 dl_ddir = vec3(0.0);
-    for (uint k = 0; k < SH_BANDS; k++) dl_ddir += dot(dl_draw, sh.v[g * K + k]) * basis_grad[k];
+    for (uint k = 1; k < SH_BANDS; k++) dl_ddir += dot(dl_draw, sh.v[g * K + k]) * basis_grad[k];
     dl_dm += (dl_ddir - dir * dot(dir, dl_ddir)) / dir_len;
 
     // ---- depth and 2D mean
