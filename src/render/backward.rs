@@ -5,7 +5,7 @@
 
 use super::features::FeaturePipelines;
 use super::params::RenderParams;
-use super::sh_degree::ShDegreePipelines;
+use super::specialized::SpecializedPipelines;
 use super::{BlendLayout, SceneBuffers};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
@@ -140,7 +140,7 @@ struct ViewGradients {
 pub struct Backward {
     gpu: Gpu,
     blend: ComputePipeline,
-    project: ShDegreePipelines,
+    project: SpecializedPipelines,
     features: FeaturePipelines,
     params: Buffer,
     view: Option<ViewGradients>,
@@ -168,7 +168,7 @@ impl Backward {
         Ok(Backward {
             gpu: gpu.clone(),
             blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, cols, 16 / cols, 16 / rows])?,
-            project: ShDegreePipelines::new("project_backward", project),
+            project: SpecializedPipelines::new("project_backward", project),
             features: FeaturePipelines::new("blend_features_backward", features, feature_rows),
             params: Buffer::new(
                 gpu,
@@ -292,8 +292,7 @@ impl Backward {
             rec.mark("blend backward");
         }
         if project {
-            self.project.prepare(&self.gpu, frame.sh_degree)?;
-            rec.dispatch(self.project.get(frame.sh_degree), &push, dispatch_1d(frame.num_gaussians.div_ceil(256)));
+            rec.dispatch(self.project.get(&self.gpu, &[frame.sh_degree])?, &push, dispatch_1d(frame.num_gaussians.div_ceil(256)));
             rec.mark("project backward");
         }
         if let (Some(_), Some(_)) = (upstream.features, grads.features.as_ref()) {

@@ -8,7 +8,7 @@ mod features;
 pub mod params;
 pub mod reference;
 pub mod scan;
-pub(crate) mod sh_degree;
+pub(crate) mod specialized;
 pub mod sort;
 
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Recorder};
@@ -16,7 +16,7 @@ use crate::scene::{Camera, GaussianScene};
 use crate::shaders;
 use anyhow::{bail, Result};
 use features::FeaturePipelines;
-use sh_degree::ShDegreePipelines;
+use specialized::{SpecializedPipelines, MAX_SH_DEGREE};
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
 use sort::RadixSort;
 
@@ -172,7 +172,7 @@ struct ImageBuffers {
 /// Owner of the forward-pass pipelines and their working memory.
 pub struct Rasterizer {
     gpu: Gpu,
-    project: ShDegreePipelines,
+    project: SpecializedPipelines,
     gather: ComputePipeline,
     emit: ComputePipeline,
     ranges: ComputePipeline,
@@ -245,7 +245,7 @@ impl Rasterizer {
         let rows = layout.forward_rows;
         Ok(Rasterizer {
             gpu: gpu.clone(),
-            project: ShDegreePipelines::new("project", shaders::PROJECT),
+            project: SpecializedPipelines::new("project", shaders::PROJECT),
             gather: ComputePipeline::new(gpu, "gather_counts", shaders::GATHER_COUNTS)?,
             emit: ComputePipeline::new(gpu, "emit_intersections", shaders::EMIT_INTERSECTIONS)?,
             ranges: ComputePipeline::new(gpu, "tile_ranges", shaders::TILE_RANGES)?,
@@ -372,7 +372,9 @@ impl Rasterizer {
         self.reserve_image(width, height, feature_dim)?;
         self.blend_features.prepare(&self.gpu, feature_dim)?;
         let degree = settings.sh_degree.unwrap_or(scene.sh_degree).min(scene.sh_degree);
-        self.project.prepare(&self.gpu, degree)?;
+        if degree > MAX_SH_DEGREE {
+            bail!("cannot render SH degree {degree}: the shaders implement degrees 0..={MAX_SH_DEGREE}");
+        }
         let tiles_x = width.div_ceil(TILE);
         let tiles_y = height.div_ceil(TILE);
         let num_tiles = tiles_x * tiles_y;
@@ -385,7 +387,7 @@ impl Rasterizer {
 
         // submission 1: project, depth sort, scan of touched counts in depth order
         let mut rec = Recorder::with_timestamps(&self.gpu, settings.timestamps)?;
-        rec.dispatch(self.project.get(degree), &push, dispatch_1d(n.div_ceil(256)));
+        rec.dispatch(self.project.get(&self.gpu, &[degree])?, &push, dispatch_1d(n.div_ceil(256)));
         rec.mark_moved("project", moved::project(n, degree));
         let in_alt =
             self.sort.record(&mut rec, &frame.depth_keys, &frame.depth_order, &isect.tile_alt, &isect.gauss_alt, n, 31);

@@ -8,7 +8,7 @@
 
 use super::adam::{AdamStep, Moments};
 use crate::gpu::{dispatch_1d, Buffer, Gpu, MemoryKind, Recorder};
-use crate::render::sh_degree::ShDegreePipelines;
+use crate::render::specialized::SpecializedPipelines;
 use crate::render::SceneBuffers;
 use crate::shaders;
 use anyhow::Result;
@@ -51,7 +51,7 @@ pub fn bytes_per_gaussian(sh_stepped: u32) -> u64 {
 
 pub struct ProjectBackwardAdam {
     gpu: Gpu,
-    pipelines: ShDegreePipelines,
+    pipelines: SpecializedPipelines,
     params: Buffer,
 }
 
@@ -61,7 +61,7 @@ impl ProjectBackwardAdam {
         let spirv = if cas { shaders::PROJECT_BACKWARD_ADAM_CAS } else { shaders::PROJECT_BACKWARD_ADAM };
         Ok(ProjectBackwardAdam {
             gpu: gpu.clone(),
-            pipelines: ShDegreePipelines::new("project_backward_adam", spirv),
+            pipelines: SpecializedPipelines::new("project_backward_adam", spirv),
             params: Buffer::new(
                 gpu,
                 "fused adam params",
@@ -104,10 +104,13 @@ impl ProjectBackwardAdam {
             frozen: groups.iter().enumerate().map(|(i, g)| (g.frozen as u32) << i).sum(),
             sh_stepped: sh_stepped.min(crate::scene::sh_coeffs(scene.sh_degree) as u32),
         };
+        // Constants: the rendered degree, and whether bands above it are stepped (moments of a
+        // higher degree rendered before); usually not, and then their loop compiles away.
+        let above = params.sh_stepped > crate::scene::sh_coeffs(sh_degree) as u32;
+        let pipeline = self.pipelines.get(&self.gpu, &[sh_degree, above as u32])?;
         self.params.write_pod(&params)?;
         let push = [render_params.address(), backward_params.address(), self.params.address()];
-        self.pipelines.prepare(&self.gpu, sh_degree)?;
-        rec.dispatch(self.pipelines.get(sh_degree), &push, dispatch_1d(n.div_ceil(256)));
+        rec.dispatch(pipeline, &push, dispatch_1d(n.div_ceil(256)));
         Ok(())
     }
 }

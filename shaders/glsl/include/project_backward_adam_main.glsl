@@ -27,6 +27,11 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer FusedAdam {
     uint sh_stepped;       // SH coefficients per channel stepped; see main
 };
 
+// Whether coefficients above the rendered bands are stepped (sh_stepped > SH_BANDS: moments of a
+// higher degree rendered before). Usually not, and a constant, so that their loop compiles away:
+// lavapipe would run its body once with every lane masked off.
+layout(constant_id = 1) const bool STEP_ABOVE_RENDERED = false;
+
 layout(local_size_x = 256) in;
 layout(push_constant) uniform Push { RenderParams p; BackwardParams b; FusedAdam a; };
 
@@ -94,8 +99,10 @@ void main() {
                 param.v[e] = value - adam_update_value(grad[c], m, v, e, s, rate);
             }
         }
-        for (uint k = SH_BANDS; k < stepped; k++) {
-            for (uint c = 0; c < 3; c++) step_element(param, m, v, (g * K + k) * 3 + c, 0.0, s, s.lr_tail);
+        if (STEP_ABOVE_RENDERED) {
+            for (uint k = SH_BANDS; k < stepped; k++) {
+                for (uint c = 0; c < 3; c++) step_element(param, m, v, (g * K + k) * 3 + c, 0.0, s, s.lr_tail);
+            }
         }
     }
 }
