@@ -292,7 +292,11 @@ impl Backward {
             rec.mark("blend backward");
         }
         if project {
-            rec.dispatch(self.project.get(&self.gpu, &[frame.sh_degree])?, &push, dispatch_1d(frame.num_gaussians.div_ceil(256)));
+            rec.dispatch(
+                self.project.get(&self.gpu, &[frame.sh_degree])?,
+                &push,
+                dispatch_1d(frame.num_gaussians.div_ceil(256)),
+            );
             rec.mark("project backward");
         }
         if let (Some(_), Some(_)) = (upstream.features, grads.features.as_ref()) {

@@ -16,9 +16,9 @@ use crate::scene::{Camera, GaussianScene};
 use crate::shaders;
 use anyhow::{bail, Result};
 use features::FeaturePipelines;
-use specialized::{SpecializedPipelines, MAX_SH_DEGREE};
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
 use sort::RadixSort;
+use specialized::{SpecializedPipelines, MAX_SH_DEGREE};
 
 pub const TILE: u32 = 16;
 

@@ -410,7 +410,17 @@ impl Trainer {
         ];
         let params = self.raster.params_buffer();
         let stepped = self.sh_stepped;
-        self.fused.record(rec, params, self.backward.params(), sh_degree, s, &groups, regularizer, self.step, stepped)?;
+        self.fused.record(
+            rec,
+            params,
+            self.backward.params(),
+            sh_degree,
+            s,
+            &groups,
+            regularizer,
+            self.step,
+            stepped,
+        )?;
         rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped));
         Ok(())
     }
