@@ -5,10 +5,10 @@
 // and likewise for alpha (1 - T_final), accumulated depth and the weight sum behind expected depth.
 // Each invocation owns ROWS x COLS pixels of the tile (the workgroup is 16/COLS x 16/ROWS), so a
 // subgroup covers that many times more pixels: a Gaussian's gradients are summed over the lane's
-// pixels in registers, then over the subgroup (any size), and added with one atomic per subgroup.
-// Subgroups where the Gaussian contributed to no pixel skip both. The fewer subgroups a Gaussian
-// meets, the fewer reductions and atomics it costs (with a pixel per invocation, two thirds of the
-// pass on lavapipe).
+// pixels in registers, then over the subgroup (any size), and added with one atomic per subgroup
+// and value, by the lane that loaded the Gaussian, once its batch is done. Subgroups where the
+// Gaussian contributed to no pixel skip both. The fewer subgroups a Gaussian meets, the fewer
+// reductions and atomics it costs (with a pixel per invocation, two thirds of the pass on lavapipe).
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
@@ -100,6 +100,12 @@ void main() {
             my_cd = vec4(Vec3View(p.color).v[my_g], p.depth.v[my_g]);
             my_reach = row_reach(my_co);
         }
+        // The subgroup's sums for the batch's j-th Gaussian end up in lane j, which adds them after
+        // the batch: the lanes' atomics go out together, not one elected lane per Gaussian (on
+        // lavapipe each atomic is a loop over the lanes, whichever are active).
+        vec2 my_g_xy = vec2(0.0);
+        vec3 my_g_conic = vec3(0.0), my_g_color = vec3(0.0);
+        float my_g_opacity = 0.0, my_g_depth = 0.0;
         for (uint jj = count; jj > 0; jj--) {
             uint j = jj - 1;
             uint idx = batch_start + j;
@@ -107,7 +113,6 @@ void main() {
             vec2 xy = subgroupBroadcast(my_xy, j);
             vec4 cd = subgroupBroadcast(my_cd, j);
             float reach = subgroupBroadcast(my_reach, j);
-            uint g = subgroupBroadcast(my_g, j);  // here, where every lane is active
             vec2 g_xy = vec2(0.0);
             vec3 g_conic = vec3(0.0);
             float g_opacity = 0.0, g_depth = 0.0;
@@ -147,27 +152,34 @@ void main() {
                 }
             }
             // j is uniform, so every lane of the subgroup reaches these reductions together. Most
-            // (Gaussian, subgroup) pairs of a tile have no contribution at all: one vote skips their ten
-            // reductions and the atomics (the sums would be zero, so nothing else changes).
+            // (Gaussian, subgroup) pairs of a tile have no contribution at all: their sums are zero.
             if (!subgroupAny(contributed)) continue;
             g_xy = subgroupAdd(g_xy);
             g_conic = subgroupAdd(g_conic);
             g_opacity = subgroupAdd(g_opacity);
             g_color = subgroupAdd(g_color);
             g_depth = subgroupAdd(g_depth);
-            if (subgroupElect() && (g_opacity != 0.0 || any(notEqual(g_color, vec3(0.0))) || g_depth != 0.0
-                                    || any(notEqual(g_xy, vec2(0.0))))) {
-                grad_add(b.grad_xy, 2 * g, g_xy.x);
-                grad_add(b.grad_xy, 2 * g + 1, g_xy.y);
-                grad_add(b.grad_conic, 3 * g, g_conic.x);
-                grad_add(b.grad_conic, 3 * g + 1, g_conic.y);
-                grad_add(b.grad_conic, 3 * g + 2, g_conic.z);
-                grad_add(b.grad_opacity, g, g_opacity);
-                grad_add(b.grad_color, 3 * g, g_color.x);
-                grad_add(b.grad_color, 3 * g + 1, g_color.y);
-                grad_add(b.grad_color, 3 * g + 2, g_color.z);
-                grad_add(b.grad_depth, g, g_depth);
+            if (gl_SubgroupInvocationID == j) {
+                my_g_xy = g_xy;
+                my_g_conic = g_conic;
+                my_g_opacity = g_opacity;
+                my_g_color = g_color;
+                my_g_depth = g_depth;
             }
+        }
+        if (my_g_opacity != 0.0 || any(notEqual(my_g_color, vec3(0.0))) || my_g_depth != 0.0
+            || any(notEqual(my_g_xy, vec2(0.0))) || any(notEqual(my_g_conic, vec3(0.0)))) {
+            uint g = my_g;
+            grad_add(b.grad_xy, 2 * g, my_g_xy.x);
+            grad_add(b.grad_xy, 2 * g + 1, my_g_xy.y);
+            grad_add(b.grad_conic, 3 * g, my_g_conic.x);
+            grad_add(b.grad_conic, 3 * g + 1, my_g_conic.y);
+            grad_add(b.grad_conic, 3 * g + 2, my_g_conic.z);
+            grad_add(b.grad_opacity, g, my_g_opacity);
+            grad_add(b.grad_color, 3 * g, my_g_color.x);
+            grad_add(b.grad_color, 3 * g + 1, my_g_color.y);
+            grad_add(b.grad_color, 3 * g + 2, my_g_color.z);
+            grad_add(b.grad_depth, g, my_g_depth);
         }
         batch_end = batch_start;
     }
