@@ -66,11 +66,16 @@ void main() {
             my_reach = row_reach(my_co);
         }
         uint count = min(lanes, end - batch);
+        // As in blend_backward: the subgroup's sums for the batch's j-th Gaussian end up in lane j,
+        // and the lanes add theirs together after the batch (one atomic loop per channel and batch
+        // on lavapipe, not one per channel and Gaussian).
+        float my_v[CHANNELS];
+        for (uint c = 0; c < CHANNELS; c++) my_v[c] = 0.0;
+        bool my_any = false;
         for (uint j = 0; j < count; j++) {
             vec2 xy = subgroupBroadcast(my_xy, j);
             vec4 co = subgroupBroadcast(my_co, j);
             float reach = subgroupBroadcast(my_reach, j);
-            uint g = subgroupBroadcast(my_g, j);
             float w[ROWS];
             bool any_weight = false;
             lane_finished = true;
@@ -82,12 +87,19 @@ void main() {
                 lane_finished = lane_finished && finished[r];
             }
             if (!subgroupAny(any_weight)) continue;  // uniform over the subgroup
+            bool mine = gl_SubgroupInvocationID == j;
+            my_any = my_any || mine;
             for (uint c = 0; c < CHANNELS; c++) {
-                if (c >= channels) break;
                 float v = 0.0;
                 for (uint r = 0; r < ROWS; r++) v += w[r] * dl_df[r][c];
                 v = subgroupAdd(v);
-                if (subgroupElect()) grad_add(b.grad_features, g * p.feature_dim + channel_offset + c, v);
+                my_v[c] = mine ? v : my_v[c];
+            }
+        }
+        if (my_any) {
+            for (uint c = 0; c < CHANNELS; c++) {
+                if (c >= channels) break;
+                grad_add(b.grad_features, my_g * p.feature_dim + channel_offset + c, my_v[c]);
             }
         }
     }
