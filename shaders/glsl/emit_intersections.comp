@@ -22,11 +22,20 @@ void main() {
     vec3 conic = conic_opacity.xyz;
     float threshold = binning_q_threshold(conic_opacity.w);
     uvec4 rect = UVec4View(p.tile_rect).v[g];
-    for (uint ty = rect.y; ty < rect.w; ty++)
-        for (uint tx = rect.x; tx < rect.z; tx++)
-            if (gaussian_touches_tile(xy, conic, threshold, tx, ty, p.width, p.height)) {
-                out_tile.v[slot] = ty * p.tiles_x + tx;
-                out_gauss.v[slot] = g;
-                slot++;
-            }
+    // The rectangle's tiles row by row in one loop: on lavapipe every loop runs its body once more,
+    // masked, after its last iteration, so nested loops paid that once per row.
+    uint tiles = (rect.z - rect.x) * (rect.w - rect.y);
+    uint tx = rect.x, ty = rect.y;
+    for (uint i = 0; i < tiles; i++) {
+        if (gaussian_touches_tile(xy, conic, threshold, tx, ty, p.width, p.height)) {
+            out_tile.v[slot] = ty * p.tiles_x + tx;
+            out_gauss.v[slot] = g;
+            slot++;
+        }
+        tx++;
+        if (tx == rect.z) {
+            tx = rect.x;
+            ty++;
+        }
+    }
 }
