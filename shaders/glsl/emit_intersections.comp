@@ -22,20 +22,12 @@ void main() {
     vec3 conic = conic_opacity.xyz;
     float threshold = binning_q_threshold(conic_opacity.w);
     uvec4 rect = UVec4View(p.tile_rect).v[g];
-    // The rectangle's tiles row by row in one loop: on lavapipe every loop runs its body once more,
-    // masked, after its last iteration, so nested loops paid that once per row.
-    uint tiles = (rect.z - rect.x) * (rect.w - rect.y);
     uint tx = rect.x, ty = rect.y;
-    for (uint i = 0; i < tiles; i++) {
+    for (uint i = 0; i < rect_tiles(rect); i++, next_tile(rect, tx, ty)) {
         if (gaussian_touches_tile(xy, conic, threshold, tx, ty, p.width, p.height)) {
             out_tile.v[slot] = ty * p.tiles_x + tx;
             out_gauss.v[slot] = g;
             slot++;
-        }
-        tx++;
-        if (tx == rect.z) {
-            tx = rect.x;
-            ty++;
         }
     }
 }

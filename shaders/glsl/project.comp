@@ -71,17 +71,9 @@ void main() {
         fx1 = min(fx1, float(p.width) - 1.0); fy1 = min(fy1, float(p.height) - 1.0);
         if (fx0 <= fx1 && fy0 <= fy1) {
             rect = uvec4(uint(fx0) / TILE, uint(fy0) / TILE, uint(fx1) / TILE + 1, uint(fy1) / TILE + 1);
-            // one loop over the rectangle's tiles, as emit_intersections.comp walks them
-            uint tiles = (rect.z - rect.x) * (rect.w - rect.y);
             uint tx_ = rect.x, ty_ = rect.y;
-            for (uint i = 0; i < tiles; i++) {
+            for (uint i = 0; i < rect_tiles(rect); i++, next_tile(rect, tx_, ty_))
                 if (gaussian_touches_tile(xy, conic, threshold, tx_, ty_, p.width, p.height)) touched++;
-                tx_++;
-                if (tx_ == rect.z) {
-                    tx_ = rect.x;
-                    ty_++;
-                }
-            }
         }
     }
     if (touched == 0) rect = uvec4(0);

@@ -62,8 +62,8 @@ pub fn run(a: TrainArgs) -> Result<()> {
     if a.iters == 0 {
         bail!("--iters must be positive");
     }
-    if a.sh_degree > 3 {
-        bail!("--sh-degree must be 0..3");
+    if a.sh_degree > cogeo::scene::MAX_SH_DEGREE {
+        bail!("--sh-degree must be 0..{}", cogeo::scene::MAX_SH_DEGREE);
     }
     let data = dataset::load(&a.data, &a.images, a.scale.downscale)?;
     for w in &data.warnings {

@@ -12,13 +12,13 @@ pub(crate) mod specialized;
 pub mod sort;
 
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Recorder};
-use crate::scene::{Camera, GaussianScene};
+use crate::scene::{Camera, GaussianScene, MAX_SH_DEGREE};
 use crate::shaders;
 use anyhow::{bail, Result};
 use features::FeaturePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
 use sort::RadixSort;
-use specialized::{SpecializedPipelines, MAX_SH_DEGREE};
+use specialized::SpecializedPipelines;
 
 pub const TILE: u32 = 16;
 
@@ -371,15 +371,15 @@ impl Rasterizer {
         self.reserve_gaussians(n)?;
         self.reserve_image(width, height, feature_dim)?;
         self.blend_features.prepare(&self.gpu, feature_dim)?;
-        let degree = settings.sh_degree.unwrap_or(scene.sh_degree).min(scene.sh_degree);
-        if degree > MAX_SH_DEGREE {
-            bail!("cannot render SH degree {degree}: the shaders implement degrees 0..={MAX_SH_DEGREE}");
-        }
         let tiles_x = width.div_ceil(TILE);
         let tiles_y = height.div_ceil(TILE);
         let num_tiles = tiles_x * tiles_y;
 
         let mut params = self.frame_params(scene, camera, settings, feature_dim, tiles_x, tiles_y);
+        let degree = params.sh_degree;
+        if degree > MAX_SH_DEGREE {
+            bail!("cannot render SH degree {degree}: the shaders implement degrees 0..={MAX_SH_DEGREE}");
+        }
         self.params.write_pod(&params)?;
         let push = ParamsPush { params: self.params.address() };
         let frame = self.frame.as_ref().unwrap();

@@ -10,9 +10,6 @@
 use crate::gpu::{ComputePipeline, Gpu};
 use anyhow::Result;
 
-/// The highest SH degree the shaders implement.
-pub const MAX_SH_DEGREE: u32 = 3;
-
 pub(crate) struct SpecializedPipelines {
     name: &'static str,
     spirv: &'static [u8],

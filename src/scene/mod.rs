@@ -73,6 +73,9 @@ pub const SH_C3: [f64; 7] = [
     -0.5900435899266435,
 ];
 
+/// The highest SH degree cogeo reads, trains and renders (the shaders implement degrees 0..=3).
+pub const MAX_SH_DEGREE: u32 = 3;
+
 /// SH coefficients per channel for a degree.
 pub fn sh_coeffs(degree: u32) -> usize {
     ((degree + 1) * (degree + 1)) as usize

@@ -1,7 +1,7 @@
 // Real spherical harmonics up to degree 3 in the INRIA basis order (conventions.md).
 
 // The SH degree a pipeline renders with: the frame's RenderParams::sh_degree, to which the host
-// specializes the pipeline (render::sh_degree). As a constant, the bands above it compile away
+// specializes the pipeline (render::specialized). As a constant, the bands above it compile away
 // and the basis loops unroll into registers; lavapipe would otherwise run every band's code with
 // its lanes masked off (it runs both sides of a branch) and keep the basis arrays in memory.
 layout(constant_id = 0) const uint SH_DEGREE = 3;

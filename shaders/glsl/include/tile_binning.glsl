@@ -39,6 +39,21 @@ bool ellipse_touches_rect(vec3 conic, float threshold, float x0, float x1, float
     return q <= threshold + 1e-5 * term_scale;
 }
 
+// A Gaussian's tile rectangle (x0, y0, x1, y1; exclusive ends) is walked row by row in one loop of
+// rect_tiles(rect) steps, next_tile moving (tx, ty) on from (x0, y0): one loop, not one per row,
+// because lavapipe runs a loop's body once more, masked, after its last iteration.
+uint rect_tiles(uvec4 rect) {
+    return (rect.z - rect.x) * (rect.w - rect.y);
+}
+
+void next_tile(uvec4 rect, inout uint tx, inout uint ty) {
+    tx++;
+    if (tx == rect.z) {
+        tx = rect.x;
+        ty++;
+    }
+}
+
 // Does the Gaussian (mean xy, conic, threshold) touch tile (tx, ty) of a width x height image?
 bool gaussian_touches_tile(vec2 xy, vec3 conic, float threshold, uint tx, uint ty, uint width, uint height) {
     float px0 = float(tx * TILE) + 0.5;
