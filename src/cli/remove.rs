@@ -107,6 +107,10 @@ pub struct RemovalFlags {
     /// Sample every Nth hole pixel in x and y for new Gaussians.
     #[arg(long, default_value_t = 1)]
     pub stride: usize,
+    /// Make each new Gaussian a sphere of its pixel's size (the earlier patch, for ablation) instead
+    /// of a flat ellipse on the completed surface covering the pixel's footprint there.
+    #[arg(long)]
+    pub round_patch: bool,
     /// Pruning: distance to the nearest patch Gaussian that makes a background Gaussian a candidate
     /// (scene units; default twice the patch spacing).
     #[arg(long)]
@@ -235,7 +239,11 @@ pub fn run(a: RemoveArgs) -> Result<()> {
             refine: !f.no_refine,
         },
         fill: f.fill,
-        fuse: cogeo::removal::fuse::FuseConfig { stride: f.stride.max(1), ..Default::default() },
+        fuse: cogeo::removal::fuse::FuseConfig {
+            stride: f.stride.max(1),
+            surfels: !f.round_patch,
+            ..Default::default()
+        },
         prune: match (f.prune_near, f.prune_radius) {
             (None, None) => None,
             (near, radius) => {

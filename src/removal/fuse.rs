@@ -3,14 +3,17 @@
 //!
 //! Back-projection: each hole pixel (every `stride`-th in x and y) at its completed depth z becomes a
 //! point colored from the inpainted image, with footprint z * stride / f (the pixel's size at that
-//! depth). Multi-view consistency: a point is dropped when, seen from another edited view, it lands
-//! inside that view's hole more than `tolerance` (relative) in front of that view's completed depth,
-//! i.e. it would float in front of the surface another view completed. Points behind it are only
+//! depth). Its Gaussian is a flat ellipse on the completed surface spanned by the steps to the
+//! neighbouring samples: a floor seen at a grazing angle gets Gaussians stretched along it, as its
+//! pixels are, with no gaps between rows and no thickness above it when seen from elsewhere.
+//! Multi-view consistency: a point is dropped when, seen from another edited view, it lands inside
+//! that view's hole more than `tolerance` (relative) in front of that view's completed depth, i.e.
+//! it would float in front of the surface another view completed. Points behind it are only
 //! occluded there and are kept. One owner per surface point: views are taken largest fill first, and
 //! a point is dropped where an earlier view completed the same surface and kept its own point there
 //! (`FuseConfig::one_owner`).
 //! Points that still fall in one voxel (the median footprint) are merged: position and color
-//! averaged.
+//! averaged, the shape of the first.
 //!
 //! Pruning (kiddo): a background Gaussian is pruned when it lies within `near` of a patch Gaussian
 //! AND has fewer than `min_neighbours` other background Gaussians within `radius`.
@@ -111,11 +114,14 @@ pub struct FuseConfig {
     /// nearly coincident Gaussians whose colors the render averaged (bench/RESULTS.md: held-out
     /// masked PSNR 0.3-1.0 dB and seen-elsewhere PSNR 1.0-1.5 dB lower).
     pub one_owner: bool,
+    /// Each patch Gaussian is a flat ellipse on the completed surface covering its pixel's footprint
+    /// there (`surface_steps`), instead of a sphere of the pixel's size across the view ray.
+    pub surfels: bool,
 }
 
 impl Default for FuseConfig {
     fn default() -> Self {
-        FuseConfig { stride: 1, tolerance: 0.03, opacity: 0.9, one_owner: true }
+        FuseConfig { stride: 1, tolerance: 0.03, opacity: 0.9, one_owner: true, surfels: true }
     }
 }
 
@@ -124,6 +130,9 @@ pub struct PatchPoint {
     pub position: [f64; 3],
     pub rgb: [f32; 3],
     pub footprint: f64,
+    /// The sampled pixel's footprint on the completed surface: the world-space steps to the next
+    /// sample in x and in y (`surface_steps`); None where the depth gives no surface there.
+    pub steps: Option<[[f64; 3]; 2]>,
 }
 
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -194,7 +203,9 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
                 }
                 kept[vi][i] = true;
                 let footprint = z * stride as f64 / v.camera.fx.min(v.camera.fy);
-                points.push(PatchPoint { position: p, rgb: [v.rgb[i], v.rgb[hw + i], v.rgb[2 * hw + i]], footprint });
+                let steps = if cfg.surfels { surface_steps(v, x, y, p, stride, footprint) } else { None };
+                let rgb = [v.rgb[i], v.rgb[hw + i], v.rgb[2 * hw + i]];
+                points.push(PatchPoint { position: p, rgb, footprint, steps });
             }
         }
     }
@@ -231,14 +242,84 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
             position: s.position.map(|c| c / n),
             rgb: s.rgb.map(|c| c / n as f32),
             footprint: s.footprint,
+            steps: s.steps,
         })
         .collect();
     stats.merged_into = merged.len();
     (merged, stats, kept)
 }
 
-/// The patch as Gaussians: isotropic scale of the footprint, identity rotation, high opacity, the
-/// color in SH band 0.
+/// The world-space steps from sample (x, y) of view `v`, at surface point `p`, to the next sample
+/// in x and in y on the completed depth: the sample's footprint on the surface. Each step is the
+/// central difference, or the shorter one-sided difference where the two sides disagree by more
+/// than 2x (a depth edge). A step longer than 8 footprints (a surface seen almost edge-on) is
+/// shortened to that. None where neither neighbour along x (or y) has a depth, or where the two
+/// steps are (nearly) parallel.
+fn surface_steps(
+    v: &FuseView,
+    x: usize,
+    y: usize,
+    p: [f64; 3],
+    stride: usize,
+    footprint: f64,
+) -> Option<[[f64; 3]; 2]> {
+    let (w, h) = (v.camera.width as isize, v.camera.height as isize);
+    let at = |x: isize, y: isize| -> Option<glam::DVec3> {
+        if x < 0 || y < 0 || x >= w || y >= h {
+            return None;
+        }
+        let z = v.depth[(y * w + x) as usize] as f64;
+        (z > 0.0 && z.is_finite()).then(|| glam::DVec3::from(v.camera.pixel_point(x as usize, y as usize, z)))
+    };
+    let p = glam::DVec3::from(p);
+    let (x, y) = (x as isize, y as isize);
+    let step = |dx: isize, dy: isize| -> Option<glam::DVec3> {
+        let ahead = at(x + dx, y + dy).map(|q| q - p);
+        let behind = at(x - dx, y - dy).map(|q| p - q);
+        let d = match (ahead, behind) {
+            (Some(a), Some(b)) => {
+                let (la, lb) = (a.length(), b.length());
+                if la > 2.0 * lb {
+                    b
+                } else if lb > 2.0 * la {
+                    a
+                } else {
+                    0.5 * (a + b)
+                }
+            }
+            (a, b) => a.or(b)?,
+        } * stride as f64;
+        let limit = 8.0 * footprint;
+        Some(if d.length() > limit { d * (limit / d.length()) } else { d })
+    };
+    let (sx, sy) = (step(1, 0)?, step(0, 1)?);
+    (sx.cross(sy).length() > 1e-3 * sx.length() * sy.length()).then_some([sx.to_array(), sy.to_array()])
+}
+
+/// A flat Gaussian on the surface spanned by the steps `[sx, sy]`: covariance
+/// k^2 (sx sx^T + sy sy^T) in the surface (its axes from the closed-form eigenvectors of that 2x2
+/// form), and a tenth of its smaller size across it. Returns (log scales, quaternion w x y z).
+fn surfel_shape(steps: [[f64; 3]; 2], k: f64) -> ([f32; 3], [f32; 4]) {
+    let (sx, sy) = (glam::DVec3::from(steps[0]), glam::DVec3::from(steps[1]));
+    let n = sx.cross(sy).normalize();
+    let e1 = sx.normalize();
+    let e2 = n.cross(e1);
+    // the form in the (e1, e2) basis: sx = (|sx|, 0), sy = (sy.e1, sy.e2)
+    let (a, b1, b2) = (sx.length(), sy.dot(e1), sy.dot(e2));
+    let (m11, m12, m22) = (a * a + b1 * b1, b1 * b2, b2 * b2);
+    let theta = 0.5 * (2.0 * m12).atan2(m11 - m22);
+    let mid = 0.5 * (m11 + m22);
+    let rad = (0.25 * (m11 - m22).powi(2) + m12 * m12).sqrt();
+    let (l1, l2) = (mid + rad, (mid - rad).max(1e-12 * mid));
+    let u1 = theta.cos() * e1 + theta.sin() * e2;
+    let u2 = n.cross(u1);
+    let q = glam::DQuat::from_mat3(&glam::DMat3::from_cols(u1, u2, n));
+    let (s1, s2) = (k * l1.sqrt(), k * l2.sqrt());
+    ([s1.ln() as f32, s2.ln() as f32, (0.1 * s2).ln() as f32], [q.w as f32, q.x as f32, q.y as f32, q.z as f32])
+}
+
+/// The patch as Gaussians: flat ellipses on the surface where the point has surface steps
+/// (`FuseConfig::surfels`), else spheres of the footprint; high opacity, the color in SH band 0.
 pub fn patch_gaussians(points: &[PatchPoint], sh_degree: u32, opacity: f32) -> GaussianScene {
     let k = crate::scene::sh_coeffs(sh_degree);
     let mut s = GaussianScene { sh_degree, ..Default::default() };
@@ -246,8 +327,12 @@ pub fn patch_gaussians(points: &[PatchPoint], sh_degree: u32, opacity: f32) -> G
     for p in points {
         s.means.push(p.position.map(|v| v as f32));
         s.normals.push([0.0; 3]);
-        s.log_scales.push([(p.footprint.max(1e-6) * 0.6).ln() as f32; 3]);
-        s.quats.push([1.0, 0.0, 0.0, 0.0]);
+        let (log_scales, quat) = match p.steps {
+            Some(steps) => surfel_shape(steps, 0.6),
+            None => ([(p.footprint.max(1e-6) * 0.6).ln() as f32; 3], [1.0, 0.0, 0.0, 0.0]),
+        };
+        s.log_scales.push(log_scales);
+        s.quats.push(quat);
         s.opacity_logits.push(logit);
         for b in 0..k {
             for c in 0..3 {
@@ -396,6 +481,74 @@ mod tests {
         assert!((190..=200).contains(&bl), "b owns the left half: {bl} points");
         assert_eq!(g, 0, "c's farther points are b's surface");
         assert_eq!(r + bl + g, points.len());
+    }
+
+    /// The surfel's covariance, rebuilt from its scales and quaternion with the renderer's rotation
+    /// convention, is the closed form k^2 (sx sx^T + sy sy^T) plus its thin extent along the normal.
+    #[test]
+    fn surfel_covariance_is_the_footprint_form() {
+        let k = 0.6;
+        for (sx, sy) in [
+            ([0.02, 0.0, 0.0], [0.0, 0.015, 0.03]),
+            ([0.01, -0.004, 0.002], [0.003, 0.012, 0.09]),
+            ([0.0, 0.0, 0.05], [0.05, 0.0, 0.0]),
+        ] {
+            let (log_scales, q) = surfel_shape([sx, sy], k);
+            let r = crate::scene::camera::rotation_from_qvec(q.map(|v| v as f64));
+            let s2 = log_scales.map(|l| (2.0 * l as f64).exp());
+            let n = glam::DVec3::from(sx).cross(glam::DVec3::from(sy)).normalize().to_array();
+            for i in 0..3 {
+                for j in 0..3 {
+                    let got: f64 = (0..3).map(|a| r[i][a] * s2[a] * r[j][a]).sum();
+                    let want = k * k * (sx[i] * sx[j] + sy[i] * sy[j]) + s2[2] * n[i] * n[j];
+                    assert!((got - want).abs() < 1e-6 * k * k * 0.01, "({i},{j}) {got} vs {want}");
+                }
+            }
+            assert!(s2[2] <= 0.011 * s2[1], "thin across the surface");
+        }
+    }
+
+    /// A floor seen at a grazing angle: the steps lie in the floor and are the differences of the
+    /// ray-plane intersections of the neighbouring pixels (central, and one-sided at a depth edge).
+    #[test]
+    fn surface_steps_follow_the_completed_floor() {
+        let cam = Camera::look_at("c", 40, 30, 40.0, [0.0, -0.6, 0.0], [0.0, 0.0, 4.0], [0.0, -1.0, 0.0]);
+        // the floor y = 0.3 (y down), camera z of each pixel's intersection with it
+        let floor_z = |x: usize, y: usize| -> f32 {
+            let a = glam::DVec3::from(cam.pixel_point(x, y, 1.0));
+            let o = glam::DVec3::from(cam.pixel_point(x, y, 0.0));
+            ((0.3 - o.y) / (a.y - o.y)) as f32
+        };
+        let mut depth: Vec<f32> = (0..1200).map(|i| if i / 40 >= 16 { floor_z(i % 40, i / 40) } else { 0.0 }).collect();
+        // a box edge: columns 30.. are 30 % nearer
+        for i in 0..1200 {
+            if i % 40 >= 30 && depth[i] > 0.0 {
+                depth[i] *= 0.7;
+            }
+        }
+        let (rgb, fill) = (vec![0.5f32; 3600], vec![true; 1200]);
+        let v = FuseView { camera: &cam, rgb: &rgb, depth: &depth, fill: &fill };
+        let point = |x: usize, y: usize| glam::DVec3::from(cam.pixel_point(x, y, floor_z(x, y) as f64));
+        for (x, y, behind_only) in [(10, 20, false), (29, 22, true)] {
+            let p = point(x, y);
+            let footprint = depth[y * 40 + x] as f64 / cam.fx;
+            let [sx, sy] = surface_steps(&v, x, y, p.to_array(), 1, footprint).expect("a surface");
+            let (sx, sy) = (glam::DVec3::from(sx), glam::DVec3::from(sy));
+            let want_x = if behind_only { p - point(x - 1, y) } else { 0.5 * (point(x + 1, y) - point(x - 1, y)) };
+            let want_y = 0.5 * (point(x, y + 1) - point(x, y - 1));
+            assert!((sx - want_x).length() < 1e-4 * want_x.length(), "x step {sx} vs {want_x}");
+            assert!((sy - want_y).length() < 1e-2 * want_y.length(), "y step {sy} vs {want_y}");
+            assert!(sx.y.abs() < 1e-4 * sx.length() && sy.y.abs() < 1e-3 * sy.length(), "in the floor");
+            assert!(sy.length() > 2.5 * footprint, "stretched along the floor: {} vs {footprint}", sy.length());
+        }
+        // the floor's first row has no depth above it: the step down is one-sided
+        let [_, sy] = surface_steps(&v, 10, 16, point(10, 16).to_array(), 1, 1.0).unwrap();
+        let want = point(10, 17) - point(10, 16);
+        assert!((glam::DVec3::from(sy) - want).length() < 1e-2 * want.length());
+        // and none where a pixel has no neighbour with depth along x
+        let lone: Vec<f32> = (0..1200).map(|i| if i == 20 * 40 + 10 { 4.0 } else { 0.0 }).collect();
+        let v = FuseView { camera: &cam, rgb: &rgb, depth: &lone, fill: &fill };
+        assert!(surface_steps(&v, 10, 20, point(10, 20).to_array(), 1, 0.1).is_none());
     }
 
     #[test]
