@@ -27,7 +27,7 @@ impl Fixture {
 fn fixture() -> &'static Fixture {
     static FIXTURE: OnceLock<Fixture> = OnceLock::new();
     FIXTURE.get_or_init(|| {
-        let root = std::env::temp_dir().join(format!("cogeo_kill_{}", std::process::id()));
+        let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("kill_safety");
         let _ = std::fs::remove_dir_all(&root);
         let f = Fixture { root };
         let (data, train, tagged) = (f.path("data"), f.path("trained"), f.path("tagged.ply"));

@@ -174,11 +174,9 @@ fn broken_files_give_clear_errors() {
 }
 
 fn tempdir() -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!(
-        "cogeo-test-{}-{}",
-        std::process::id(),
-        std::thread::current().name().unwrap_or("t").replace("::", "_")
-    ));
+    let name = std::thread::current().name().unwrap_or("t").replace("::", "_");
+    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("ply-{name}"));
+    let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }
