@@ -330,16 +330,17 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
         let in_hole = inside && hole[y as usize * w + x as usize];
         assert_eq!(t.found[p], inside && !in_hole, "pixel {p}");
         blocked += in_hole as usize;
-        // away from the source's border, where bilinear lookups clamp, the color is exact
-        if t.found[p] && x > 1.0 && x < w as f64 - 1.0 && y > 1.0 && y < h as f64 - 1.0 {
+        // away from the source's border, where the Lanczos taps clamp, the color is the surface
+        // point's: Lanczos-3 reproduces the photo's ramp (0.008 per pixel) to 0.02 pixel
+        if t.found[p] && x > 3.0 && x < w as f64 - 3.0 && y > 3.0 && y < h as f64 - 3.0 {
             let c = color(pt);
             for (k, &ck) in c.iter().enumerate() {
-                assert!((t.rgb[k * w * h + p] as f64 - ck).abs() < 1e-5, "pixel {p} channel {k}");
+                assert!((t.rgb[k * w * h + p] as f64 - ck).abs() < 5e-4, "pixel {p} channel {k}");
             }
             found += 1;
         }
     }
-    assert!(found > 600 && blocked > 20, "found {found}, blocked {blocked}");
+    assert!(found > 400 && blocked > 20, "found {found}, blocked {blocked}");
     // a completed depth 10 % off does not match what the source rendered there
     let off = vec![5.5f32; w * h];
     let t = transfer(0, &target_cam, &off, &fill, &sources, 0.05);
