@@ -81,7 +81,13 @@ impl Camera {
 
     /// World point of pixel (x, y)'s center at view depth `z`: x_w = R^T (x_c - t).
     pub fn pixel_point(&self, x: usize, y: usize, z: f64) -> [f64; 3] {
-        let pc = [(x as f64 + 0.5 - self.cx) / self.fx * z, (y as f64 + 0.5 - self.cy) / self.fy * z, z];
+        self.image_point(x as f64 + 0.5, y as f64 + 0.5, z)
+    }
+
+    /// World point at the continuous image position (x, y) (pixel centers at +0.5, as
+    /// `project_to_image` returns them) and view depth z.
+    pub fn image_point(&self, x: f64, y: f64, z: f64) -> [f64; 3] {
+        let pc = [(x - self.cx) / self.fx * z, (y - self.cy) / self.fy * z, z];
         let d = [pc[0] - self.translation[0], pc[1] - self.translation[1], pc[2] - self.translation[2]];
         let r = &self.rotation;
         [

@@ -74,30 +74,66 @@ fn solve3(mut m: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
     Some(z)
 }
 
-/// Least-squares plane through the pixels `idx` (centered coordinates for conditioning).
-fn least_squares(idx: &[usize], disp: &[f32], w: usize) -> Option<Plane> {
-    let n = idx.len() as f64;
-    if idx.len() < 3 {
+/// Least-squares plane through the pixels `idx`, each weighted by `weight` (centered coordinates
+/// for conditioning).
+fn least_squares(idx: &[usize], disp: &[f32], w: usize, weight: impl Fn(usize) -> f64) -> Option<Plane> {
+    let n: f64 = idx.iter().map(|&i| weight(i)).sum();
+    if idx.len() < 3 || n <= 0.0 {
         return None;
     }
     let (mx, my) = idx.iter().fold((0.0, 0.0), |(sx, sy), &i| {
         let (x, y) = center(i, w);
-        (sx + x / n, sy + y / n)
+        (sx + weight(i) * x / n, sy + weight(i) * y / n)
     });
     let mut m = [[0f64; 3]; 3];
     let mut r = [0f64; 3];
     for &i in idx {
         let (x, y) = center(i, w);
-        let row = [x - mx, y - my, 1.0];
+        let (row, k) = ([x - mx, y - my, 1.0], weight(i));
         for j in 0..3 {
-            for k in 0..3 {
-                m[j][k] += row[j] * row[k];
+            for l in 0..3 {
+                m[j][l] += k * row[j] * row[l];
             }
-            r[j] += row[j] * disp[i] as f64;
+            r[j] += k * row[j] * disp[i] as f64;
         }
     }
     let [a, b, c] = solve3(m, r)?;
     Some(Plane { a, b, c: c - a * mx - b * my })
+}
+
+/// The plane of the surface at pixel (x, y): a robust fit of the disparity in the window of
+/// `radius` around it. It starts from the pixels within 10 % of the center's disparity (a depth
+/// edge in the window does not pull it) and is refitted three times with Tukey weights on the
+/// relative residual (scale `PLANE_TOLERANCE`). None with fewer than 6 pixels with a disparity or
+/// a degenerate window. Per-pixel depths scatter by a percent or two; the plane does not, so the
+/// surface's orientation comes from it.
+pub fn local_plane(disp: &[f32], w: usize, h: usize, x: usize, y: usize, radius: usize) -> Option<Plane> {
+    let valid = |i: usize| disp[i] > 0.0 && disp[i].is_finite();
+    let center_disp = disp[y * w + x] as f64;
+    if !valid(y * w + x) {
+        return None;
+    }
+    let idx: Vec<usize> = (y.saturating_sub(radius)..(y + radius + 1).min(h))
+        .flat_map(|yy| (x.saturating_sub(radius)..(x + radius + 1).min(w)).map(move |xx| yy * w + xx))
+        .filter(|&i| valid(i))
+        .collect();
+    if idx.len() < 6 {
+        return None;
+    }
+    let near = |i: usize| (((disp[i] as f64 - center_disp).abs() / center_disp) < 0.1) as u8 as f64;
+    let mut plane = least_squares(&idx, disp, w, near)?;
+    for _ in 0..3 {
+        let tukey = |i: usize| {
+            let r = plane.residual(i, w, disp[i] as f64) / PLANE_TOLERANCE;
+            if r < 1.0 {
+                (1.0 - r * r).powi(2)
+            } else {
+                0.0
+            }
+        };
+        plane = least_squares(&idx, disp, w, tukey)?;
+    }
+    Some(plane)
 }
 
 /// Deterministic splitmix64.
@@ -169,7 +205,7 @@ pub fn fit_planes(
             rs.sort_by(|a, b| a.total_cmp(b));
             let cut = (3.0 * rs[rs.len() / 2]).max(1e-7);
             let core: Vec<usize> = inl.into_iter().filter(|&i| p.residual(i, w, disp[i] as f64) <= cut).collect();
-            p = least_squares(&core, disp, w).unwrap_or(p);
+            p = least_squares(&core, disp, w, |_| 1.0).unwrap_or(p);
         }
         let own = inliers(&p, &pts);
         if own.len() < min_inliers {
