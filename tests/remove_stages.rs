@@ -431,3 +431,70 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     assert!(report.pixels > 1000 && report.scale == 1.0, "{report:?}");
     assert!((0..w * h).all(|p| far_off[p] == if hole[p] { 4.6 } else { 5.0 }));
 }
+
+/// Hole masks of a view where a removed box (z = 3) stands in front of a wall (z = 5) and, half
+/// inside the hole, a kept object (label 2, z = 4): after deletion the wall covers the whole hole
+/// with alpha ~1, yet only the kept object's pixels keep their render; the wall's become fill.
+/// Of those, a completed depth far behind the wall makes no patch Gaussians (the wall lies more
+/// than `LEFTOVER_IN_FRONT` in front of it), one just behind it does.
+#[test]
+fn hole_fill_keeps_only_kept_objects_not_the_background_left_behind() {
+    use cogeo::removal::select::{hole_masks, select_gaussians, HoleConfig, LEFTOVER_IN_FRONT};
+    use cogeo::scene::{Camera, GaussianScene};
+    let gpu = common::gpu();
+    let (w, h) = (48usize, 32usize);
+    let cam = Camera::look_at("c", w as u32, h as u32, 40.0, [0.0; 3], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]);
+    let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
+    let mut labels = Vec::new();
+    // a one-pixel grid of opaque Gaussians over pixels [x0, x1) x [y0, y1) at depth z
+    let mut layer = |x0: i32, x1: i32, y0: i32, y1: i32, z: f32, label: u8, color: f32| {
+        for py in y0..y1 {
+            for px in x0..x1 {
+                let p = cam.image_point(px as f64 + 0.5, py as f64 + 0.5, z as f64);
+                scene.means.push(p.map(|v| v as f32));
+                scene.normals.push([0.0; 3]);
+                scene.log_scales.push([(0.7 * z / cam.fx as f32).ln(); 3]);
+                scene.quats.push([1.0, 0.0, 0.0, 0.0]);
+                scene.opacity_logits.push(common::logit(0.99));
+                scene.sh.extend([(color - 0.5) / cogeo::scene::SH_C0 as f32; 3]);
+                labels.push(label);
+            }
+        }
+    };
+    layer(-4, 52, -4, 36, 5.0, 0, 0.8); // the wall
+    layer(16, 32, 8, 24, 3.0, 1, 0.2); // the box to remove
+    layer(26, 40, 10, 22, 4.0, 2, 0.5); // the kept object, behind the box
+    let selection = select_gaussians(&scene, &labels, &[1]).unwrap();
+    let cfg = HoleConfig { threshold: 0.3, dilate: 2.0, keep_alpha: 0.9, background: [0.0; 3] };
+    let views = hole_masks(&gpu, &scene, &selection, std::slice::from_ref(&cam), &cfg, &mut |_, _| {}).unwrap();
+    let m = &views[0];
+    let at = |x: usize, y: usize| y * w + x;
+    let hole_n = m.hole.iter().filter(|&&v| v).count();
+    assert!(hole_n >= 16 * 16, "the box's hole: {hole_n} pixels");
+    // every hole pixel is covered after deletion: keeping covered pixels would fill none
+    assert!((0..w * h).filter(|&p| m.hole[p]).all(|p| m.after_removal.alpha[p] >= 0.9));
+    for (x, y) in [(15, 24), (20, 16), (22, 7)] {
+        assert!(m.hole[at(x, y)] && m.fill[at(x, y)], "the wall behind the box at ({x},{y}) is filled");
+    }
+    for (x, y) in [(27, 11), (29, 16), (31, 21)] {
+        assert!(m.hole[at(x, y)] && !m.fill[at(x, y)], "the kept object at ({x},{y}) keeps its render");
+    }
+    // exactly the kept object's pixels keep their render: all of its rectangle (26..40 x 10..22)
+    // inside the hole, and nothing farther than its blurred 2-pixel edge
+    let rect = |p: usize, margin: usize| {
+        (26 - margin..40 + margin).contains(&(p % w)) && (10 - margin..22 + margin).contains(&(p / w))
+    };
+    for p in (0..w * h).filter(|&p| m.hole[p]) {
+        if rect(p, 0) {
+            assert!(!m.fill[p], "kept object pixel {p} filled");
+        } else if !rect(p, 2) {
+            assert!(m.fill[p], "wall pixel {p} not filled");
+        }
+    }
+    // patch Gaussians: where the completed depth is just behind the wall, at every fill pixel
+    // (but the kept object's blurred edge, whose render is in front of it); none where it is 40 %
+    // behind the wall
+    let near = m.patch_pixels(&vec![5.0 * (1.0 + LEFTOVER_IN_FRONT / 2.0); w * h], 0.9);
+    assert!((0..w * h).filter(|&p| m.fill[p] && !rect(p, 2)).all(|p| near[p]));
+    assert!(m.patch_pixels(&vec![7.0; w * h], 0.9).iter().all(|&p| !p));
+}

@@ -96,9 +96,10 @@ pub struct RemovalFlags {
     /// Hole dilation in pixels.
     #[arg(long, default_value_t = 2.0)]
     pub dilate: f32,
-    /// Hole pixels the remaining Gaussians already cover with at least this alpha keep their render
-    /// (background seen from other views), unless it lies 1.25x behind the surfaces around the
-    /// hole; 1 inpaints the whole hole.
+    /// Hole pixels that a kept object (a remaining Gaussian with a nonzero label) covers with at
+    /// least this alpha keep their render, unless it lies 1.25x behind the surfaces around the
+    /// hole; 1 fills the whole hole. The background Gaussians left behind the removed objects never
+    /// keep a pixel: it is filled (photo colors where other views saw it) and gets new Gaussians.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
     /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.

@@ -201,11 +201,17 @@ pub fn remove(
             }
         }
         // 4. fusion and pruning (or the nearest-copy baseline)
+        let patch_pixels: Vec<Vec<bool>> =
+            masked.iter().zip(&completed).map(|(m, k)| m.patch_pixels(&k.depth, opts.keep_alpha)).collect();
+        for ((r, m), p) in per_view.iter_mut().zip(&masked).zip(&patch_pixels) {
+            r["fill_pixels_without_patch"] =
+                (m.fill.iter().filter(|&&f| f).count() - p.iter().filter(|&&f| f).count()).into();
+        }
         let fviews: Vec<FuseView> = completed
             .iter()
-            .zip(&masked)
+            .zip(&patch_pixels)
             .zip(cameras)
-            .map(|((k, m), camera)| FuseView { camera, rgb: &k.rgb, depth: &k.depth, fill: &m.fill })
+            .map(|((k, fill), camera)| FuseView { camera, rgb: &k.rgb, depth: &k.depth, fill })
             .collect();
         let removed_means: Vec<[f32; 3]> =
             scene.means.iter().zip(&selection.removed).filter(|(_, &r)| r).map(|(m, _)| *m).collect();

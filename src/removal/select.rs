@@ -4,9 +4,13 @@
 //! 2. Hole masks: per edited view, M = pixels where the removed Gaussians carried more than
 //!    `hole_threshold` of the pixel's blending weight in the original render (their weight is
 //!    splatted as a one-channel feature), dilated by `dilate` pixels. The pixels to synthesize are
-//!    the part of M that the remaining Gaussians do not already cover (alpha after removal below
-//!    `keep_alpha`): background seen from other views keeps its render (completion adds the covered
-//!    pixels that look through a gap past the surrounding surfaces: `complete::depth::see_through`).
+//!    all of M except where a kept object (a remaining Gaussian with a nonzero label) covers it
+//!    (alpha after removal at least `keep_alpha`, mostly the object's weight): that object stays as
+//!    it is. The background Gaussians left behind a removed object are no reason to keep a pixel's
+//!    render: few views constrained them, and keeping their render left the bench's far floor blurred
+//!    (held-out seen-elsewhere PSNR 0.5-1.1 dB lower, bench/RESULTS.md). Completion adds the
+//!    object-covered pixels that look through a gap past the surrounding surfaces
+//!    (`complete::depth::see_through`).
 
 use crate::gpu::Gpu;
 use crate::image_ops::dilate;
@@ -26,6 +30,8 @@ pub struct Selection {
     pub count: usize,
     /// The remaining Gaussians, in their input order.
     pub background: GaussianScene,
+    /// Per remaining Gaussian: true when it belongs to a kept object (a nonzero label).
+    pub kept_objects: Vec<bool>,
 }
 
 /// Stage 1: selects the Gaussians of the `chosen` labels; fails when none or all of them go.
@@ -40,17 +46,19 @@ pub fn select_gaussians(scene: &GaussianScene, labels: &[u8], chosen: &[u8]) -> 
     if background.is_empty() {
         bail!("removing label(s) {:?} leaves no Gaussian", chosen);
     }
-    Ok(Selection { removed, count, background })
+    let kept_objects = labels.iter().zip(&removed).filter(|(_, &r)| !r).map(|(&l, _)| l != 0).collect();
+    Ok(Selection { removed, count, background, kept_objects })
 }
 
-/// Renders RGB, alpha, expected depth and (with `removed`) the removed Gaussians' weight.
+/// Renders RGB, alpha, expected depth and (with `marked`) the marked Gaussians' weight.
 pub struct ViewRenderer {
     raster: Rasterizer,
     buffers: SceneBuffers,
     features: bool,
 }
 
-/// One render of a view (planar RGB, alpha, expected depth; the removed weight when asked for).
+/// One render of a view (planar RGB, alpha, expected depth; the marked Gaussians' weight when
+/// asked for).
 pub struct Rendered {
     pub rgb: Vec<f32>,
     pub alpha: Vec<f32>,
@@ -59,16 +67,47 @@ pub struct Rendered {
 }
 
 impl ViewRenderer {
-    pub fn new(gpu: &Gpu, scene: &GaussianScene, removed: Option<&[bool]>) -> Result<ViewRenderer> {
-        let feature: Option<Vec<f32>> = removed.map(|r| r.iter().map(|&x| x as u8 as f32).collect());
+    pub fn new(gpu: &Gpu, scene: &GaussianScene, marked: Option<&[bool]>) -> Result<ViewRenderer> {
+        let feature: Option<Vec<f32>> = marked.map(|r| r.iter().map(|&x| x as u8 as f32).collect());
         let buffers = SceneBuffers::upload(gpu, scene, feature.as_deref().map(|f| (f, 1)))?;
-        Ok(ViewRenderer { raster: Rasterizer::new(gpu)?, buffers, features: removed.is_some() })
+        Ok(ViewRenderer { raster: Rasterizer::new(gpu)?, buffers, features: marked.is_some() })
     }
 
     pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
         let settings = RenderSettings { background, features: self.features, ..Default::default() };
         let o = self.raster.render(&self.buffers, camera, &settings)?;
         Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight: o.features })
+    }
+}
+
+impl Rendered {
+    /// Does a kept object cover pixel `p` of this render after removal: alpha at least
+    /// `keep_alpha`, at least half of it the kept objects' weight?
+    pub fn kept_object_covers(&self, p: usize, keep_alpha: f32) -> bool {
+        self.alpha[p] >= keep_alpha && self.weight[p] >= KEPT_OBJECT_SHARE * self.alpha[p]
+    }
+}
+
+/// The share of a covered pixel's weight that makes it a kept object's.
+const KEPT_OBJECT_SHARE: f32 = 0.5;
+
+/// How far (relative) the Gaussians left behind a removed object may lie in front of the completed
+/// surface where they cover a fill pixel, for that pixel to become a patch Gaussian. Where they lie
+/// farther in front, the completion is the doubtful one: on the bench, planes continued past a
+/// floor's crease put the wall's pixels 25-30 % behind the wall, and their patch Gaussians were
+/// floaters (score 113 -> 189 on three-of-four with them, 119 without).
+pub const LEFTOVER_IN_FRONT: f32 = 0.06;
+
+impl MaskedView {
+    /// The fill pixels that become patch Gaussians at the completed `depth`: all of them except
+    /// those that Gaussians left behind a removed object cover (alpha at least `keep_alpha`) more
+    /// than `LEFTOVER_IN_FRONT` in front of that depth. Their colors still come from the
+    /// completion; the refinement recolors what covers them.
+    pub fn patch_pixels(&self, depth: &[f32], keep_alpha: f32) -> Vec<bool> {
+        let a = &self.after_removal;
+        (0..self.fill.len())
+            .map(|p| self.fill[p] && !(a.alpha[p] >= keep_alpha && a.depth[p] < depth[p] * (1.0 - LEFTOVER_IN_FRONT)))
+            .collect()
     }
 }
 
@@ -84,7 +123,7 @@ pub struct HoleConfig {
     pub threshold: f32,
     /// Hole dilation in pixels.
     pub dilate: f32,
-    /// Hole pixels the remaining Gaussians cover with at least this alpha keep their render.
+    /// Hole pixels a kept object covers with at least this alpha keep their render.
     pub keep_alpha: f32,
     pub background: [f32; 3],
 }
@@ -93,7 +132,8 @@ pub struct HoleConfig {
 pub struct MaskedView {
     /// Original render: RGB, and the alpha and expected depth that color transfer checks.
     pub before: Rendered,
-    /// Render right after deleting the Gaussians (the input of completion).
+    /// Render right after deleting the Gaussians (the input of completion); its `weight` is the
+    /// kept objects'.
     pub after_removal: Rendered,
     /// Dilated hole M.
     pub hole: Vec<bool>,
@@ -114,14 +154,15 @@ pub fn hole_masks(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<MaskedView>> {
     let mut original = ViewRenderer::new(gpu, scene, Some(&selection.removed))?;
-    let mut remaining = ViewRenderer::new(gpu, &selection.background, None)?;
+    let mut remaining = ViewRenderer::new(gpu, &selection.background, Some(&selection.kept_objects))?;
     let mut views = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
         let mut before = original.render(cam, cfg.background)?;
         let hole = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, cfg.dilate);
         let after_removal = remaining.render(cam, cfg.background)?;
-        let fill: Vec<bool> = (0..w * h).map(|p| hole[p] && after_removal.alpha[p] < cfg.keep_alpha).collect();
+        let fill: Vec<bool> =
+            (0..w * h).map(|p| hole[p] && !after_removal.kept_object_covers(p, cfg.keep_alpha)).collect();
         let footprint = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, 1.0);
         before.weight = Vec::new();
         views.push(MaskedView { before, after_removal, hole, fill, footprint });
