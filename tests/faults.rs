@@ -18,8 +18,7 @@ const EXE: &str = env!("CARGO_BIN_EXE_cogeo");
 fn root() -> &'static PathBuf {
     static ROOT: OnceLock<PathBuf> = OnceLock::new();
     ROOT.get_or_init(|| {
-        let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("faults");
-        let _ = std::fs::remove_dir_all(&root);
+        let root = common::scratch_dir("faults");
         let p = |s: &str| root.join(s).to_string_lossy().into_owned();
         run_cogeo(
             EXE,

@@ -27,8 +27,7 @@ impl Fixture {
 fn fixture() -> &'static Fixture {
     static FIXTURE: OnceLock<Fixture> = OnceLock::new();
     FIXTURE.get_or_init(|| {
-        let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("kill_safety");
-        let _ = std::fs::remove_dir_all(&root);
+        let root = common::scratch_dir("kill_safety");
         let f = Fixture { root };
         let (data, train, tagged) = (f.path("data"), f.path("trained"), f.path("tagged.ply"));
         let synth = ["synth", "--out", &data, "--width", "32", "--height", "24", "--views", "8", "--objects", "2"];

@@ -175,8 +175,5 @@ fn broken_files_give_clear_errors() {
 
 fn tempdir() -> std::path::PathBuf {
     let name = std::thread::current().name().unwrap_or("t").replace("::", "_");
-    let d = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("ply-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch_dir(&format!("ply-{name}"))
 }

@@ -2,14 +2,14 @@
 //! resumed from its checkpoint: the run must finish, leave no partial files, and reach a measured
 //! test-view PSNR.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
 fn tempdir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("train-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    common::scratch_dir(&format!("train-{name}"))
 }
 
 fn cogeo() -> Command {

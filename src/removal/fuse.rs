@@ -132,8 +132,8 @@ pub struct PatchPoint {
     pub position: [f64; 3],
     pub rgb: [f32; 3],
     pub footprint: f64,
-    /// The sampled pixel's footprint on the completed surface: the world-space steps to the next
-    /// sample in x and in y (`surface_steps`); None where the depth gives no surface there.
+    /// The sampled pixel's footprint on the completed surface: the world-space steps across it in
+    /// x and in y on the plane fitted there (`surface_steps`); None where no plane fits.
     pub steps: Option<[[f64; 3]; 2]>,
 }
 

@@ -30,6 +30,15 @@ impl Drop for TestGpu {
     }
 }
 
+/// A fixed, emptied folder `name` under the target's temporary directory: one per test name, not
+/// one per process in /tmp (those piled up run after run).
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
 /// Validation is on unless COGEO_VALIDATE=0 is set explicitly.
 pub fn gpu() -> TestGpu {
     let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
