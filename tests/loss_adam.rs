@@ -153,55 +153,68 @@ fn adam_split_rates_follow_the_period() {
     assert!(err < 1e-5, "adam error {err}");
 }
 
+/// The trust region bounds each Gaussian's step: rows of 3 (means, scales) and 4 (rotations),
+/// three Adam steps of random gradients (so that rows differ in size), each row's update clipped
+/// to the radius on its own, against an f64 reference of Adam and the clip.
 #[test]
-fn trust_region_clips_each_tensors_update_to_the_radius() {
+fn trust_region_clips_each_gaussians_update_to_the_radius() {
     let g = gpu();
-    let mut adam = Adam::new(&g).unwrap();
+    let adam = Adam::new(&g).unwrap();
     let mut rng = Rng::new(9);
-    // two tensors clipped in one submission (separate scratch slots), one of them inside the region
-    let sizes = [5000usize, 300];
-    let radii = [0.05f32, 10.0];
-    let params: Vec<Vec<f32>> = sizes.iter().map(|&n| image(&mut rng, n)).collect();
-    let grads: Vec<Vec<f32>> = sizes.iter().map(|&n| (0..n).map(|_| rng.normal() as f32).collect()).collect();
-    let p_bufs: Vec<Buffer> = params.iter().map(|p| Buffer::from_slice(&g, "p", p).unwrap()).collect();
-    let g_bufs: Vec<Buffer> = grads.iter().map(|x| Buffer::from_slice(&g, "g", x).unwrap()).collect();
-    let moments: Vec<Moments> = sizes.iter().map(|&n| Moments::new(&g, "p", n as u32).unwrap()).collect();
-    let lr = 0.01f32;
-    let mut rec = Recorder::new(&g).unwrap();
-    for t in 0..2 {
-        adam.record_clipped(&mut rec, &p_bufs[t], &g_bufs[t], &moments[t], (lr, 1, 1, lr), 1, radii[t], t).unwrap();
-    }
-    rec.submit_and_wait().unwrap();
-    for t in 0..2 {
-        let got: Vec<f32> = p_bufs[t].download(&g, sizes[t]).unwrap();
-        // first Adam step: u = lr * g / (|g| + eps') ~ lr * sign(g)
-        let u: Vec<f64> = grads[t]
-            .iter()
-            .map(|&gi| {
-                let gi = gi as f64;
-                let m = (1.0 - BETA1 as f64) * gi / (1.0 - BETA1 as f64);
-                let v = (1.0 - BETA2 as f64) * gi * gi / (1.0 - BETA2 as f64);
-                lr as f64 * m / (v.sqrt() + EPS as f64)
-            })
-            .collect();
-        let norm = u.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let s = if norm > radii[t] as f64 { radii[t] as f64 / norm } else { 1.0 };
-        let step_norm = got.iter().zip(&params[t]).map(|(a, b)| ((a - b) as f64).powi(2)).sum::<f64>().sqrt();
-        let err = got
-            .iter()
-            .zip(&params[t])
-            .zip(&u)
-            .map(|((a, b), ui)| ((*b as f64 - s * ui) - *a as f64).abs())
-            .fold(0.0, f64::max);
-        println!(
-            "tensor {t}: unclipped |u| {norm:.4}, radius {}, applied |dp| {step_norm:.6}, max error {err:.2e}",
-            radii[t]
-        );
-        assert!(err < 1e-6, "tensor {t}: error {err}");
-        if norm > radii[t] as f64 {
-            assert!((step_norm - radii[t] as f64).abs() < 1e-4 * radii[t] as f64, "clip does not hold: {step_norm}");
-        } else {
-            assert!((step_norm - norm).abs() < 1e-4 * norm, "unclipped update changed: {step_norm} vs {norm}");
+    let lr = 0.01f64;
+    for (width, rows) in [(3usize, 2000usize), (4, 700)] {
+        let n = width * rows;
+        let start = image(&mut rng, n);
+        let p_buf = Buffer::from_slice(&g, "p", &start).unwrap();
+        let moments = Moments::new(&g, "p", n as u32).unwrap();
+        let (mut p, mut m, mut v) = (start.iter().map(|&x| x as f64).collect::<Vec<_>>(), vec![0.0; n], vec![0.0; n]);
+        // about half of the rows clip: the radius sits between the typical and the largest norms
+        let radius = 0.8 * lr * (width as f64).sqrt();
+        let (mut clipped, mut free) = (0, 0);
+        for step in 1..=3u32 {
+            let grad: Vec<f32> = (0..n).map(|_| rng.normal() as f32).collect();
+            let g_buf = Buffer::from_slice(&g, "g", &grad).unwrap();
+            let mut rec = Recorder::new(&g).unwrap();
+            adam.record_clipped(&mut rec, &p_buf, &g_buf, &moments, lr as f32, step, width as u32, radius as f32);
+            rec.submit_and_wait().unwrap();
+            let (b1, b2) = (BETA1 as f64, BETA2 as f64);
+            let before = p.clone();
+            let u: Vec<f64> = (0..n)
+                .map(|i| {
+                    let gi = grad[i] as f64;
+                    m[i] = b1 * m[i] + (1.0 - b1) * gi;
+                    v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
+                    lr * (m[i] / (1.0 - b1.powi(step as i32)))
+                        / ((v[i] / (1.0 - b2.powi(step as i32))).sqrt() + EPS as f64)
+                })
+                .collect();
+            for r in 0..rows {
+                let row = &u[r * width..(r + 1) * width];
+                let norm = row.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let s = if norm > radius { radius / norm } else { 1.0 };
+                if norm > radius {
+                    clipped += 1
+                } else {
+                    free += 1
+                }
+                for k in 0..width {
+                    p[r * width + k] -= s * row[k];
+                }
+            }
+            let got: Vec<f32> = p_buf.download(&g, n).unwrap();
+            let err = got.iter().zip(&p).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+            // every row's applied step, measured on the GPU's parameters, stays within the radius
+            let longest = (0..rows)
+                .map(|r| {
+                    (0..width).map(|k| (got[r * width + k] as f64 - before[r * width + k]).powi(2)).sum::<f64>().sqrt()
+                })
+                .fold(0.0, f64::max);
+            println!(
+                "width {width}, step {step}: max error {err:.2e}, longest row step {longest:.5} (radius {radius:.5})"
+            );
+            assert!(err < 2e-6, "width {width}, step {step}: error {err}");
+            assert!(longest < radius + 2e-6, "a row moved {longest} > {radius}");
         }
+        assert!(clipped > rows / 4 && free > rows / 4, "width {width}: {clipped} clipped, {free} free rows");
     }
 }

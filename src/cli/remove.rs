@@ -87,7 +87,13 @@ pub struct RemovalFlags {
     /// cannot recolor the Gaussians left behind the objects.
     #[arg(long, default_value_t = cogeo::removal::refine::COLOR_LR_GAIN)]
     pub refine_color_lr_gain: f32,
-    /// Trust region: per-step update norm bound of each geometry tensor in the second half.
+    /// Refinement learning rate of the Gaussians' scales and rotations as a multiple of
+    /// training's: in the short second half the patch's footprint-sized ellipses must take the
+    /// shape of the surface's texture, not just settle.
+    #[arg(long, default_value_t = cogeo::removal::refine::SHAPE_LR_GAIN)]
+    pub refine_shape_lr_gain: f32,
+    /// Trust region of the second half: each Gaussian's per-step update of its position, of its
+    /// log-scales and of its rotation is clipped to this Euclidean norm.
     #[arg(long, default_value_t = 0.01)]
     pub trust_radius: f32,
     /// A pixel is in the hole when the removed Gaussians carry more than this share of its weight.
@@ -262,6 +268,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
             background: f.background,
             seed: f.seed,
             color_lr_gain: f.refine_color_lr_gain,
+            shape_lr_gain: f.refine_shape_lr_gain,
             ..Default::default()
         },
         background: f.background,

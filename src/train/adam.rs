@@ -71,52 +71,14 @@ impl Moments {
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct UpdatePush {
+struct ClippedPush {
+    param: u64,
     grad: u64,
     m: u64,
     v: u64,
-    update: u64,
-    partial: u64,
     step: AdamStep,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct ReducePush {
-    values: u64,
-    total: u64,
-    count: u32,
-    pad: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct ApplyPush {
-    param: u64,
-    update: u64,
-    total: u64,
-    n: u32,
+    width: u32,
     radius: f32,
-}
-
-/// Scratch of the trust-region step: per-element updates, per-workgroup sums, the total.
-struct ClipScratch {
-    capacity: u32,
-    update: Buffer,
-    partial: Buffer,
-    total: Buffer,
-}
-
-impl ClipScratch {
-    fn new(gpu: &Gpu, capacity: u64) -> Result<ClipScratch> {
-        let buf = |name: &str, floats: u64| Buffer::new(gpu, name, floats * 4, crate::gpu::MemoryKind::Device);
-        Ok(ClipScratch {
-            capacity: capacity as u32,
-            update: buf("trust region update", capacity)?,
-            partial: buf("trust region partial sums", capacity.div_ceil(256))?,
-            total: buf("trust region total", 1)?,
-        })
-    }
 }
 
 /// Device-memory bytes one Adam step moves per element: parameter, gradient and both moments read,
@@ -127,24 +89,15 @@ pub const BYTES_PER_ELEMENT: u64 = 7 * 4;
 const ELEMENTS_PER_GROUP: u32 = 4 * 256;
 
 pub struct Adam {
-    gpu: Gpu,
     pipeline: ComputePipeline,
-    update: ComputePipeline,
-    reduce: ComputePipeline,
-    apply: ComputePipeline,
-    /// Per slot, so tensors clipped in one submission do not share scratch.
-    scratch: Vec<Option<ClipScratch>>,
+    clipped: ComputePipeline,
 }
 
 impl Adam {
     pub fn new(gpu: &Gpu) -> Result<Adam> {
         Ok(Adam {
-            gpu: gpu.clone(),
             pipeline: ComputePipeline::new(gpu, "adam", shaders::ADAM)?,
-            update: ComputePipeline::new(gpu, "adam_update", shaders::ADAM_UPDATE)?,
-            reduce: ComputePipeline::new(gpu, "reduce_sum", shaders::REDUCE_SUM)?,
-            apply: ComputePipeline::new(gpu, "apply_update", shaders::APPLY_UPDATE)?,
-            scratch: Vec::new(),
+            clipped: ComputePipeline::new(gpu, "adam_clipped", shaders::ADAM_CLIPPED)?,
         })
     }
 
@@ -173,47 +126,35 @@ impl Adam {
         rec.dispatch(&self.pipeline, &push, dispatch_1d(moments.len.div_ceil(ELEMENTS_PER_GROUP)));
     }
 
-    /// As `record_split`, with the update of the whole tensor clipped to Euclidean norm `radius`
-    /// (a trust region): p -= u * min(1, radius / |u|). `slot` names a scratch area: tensors clipped
-    /// in the same submission need different slots.
+    /// As `record`, for a tensor of rows of `width` elements (one per Gaussian, at most 4), with
+    /// each row's update clipped to Euclidean norm `radius` (a trust region per Gaussian):
+    /// p_row -= u_row * min(1, radius / |u_row|).
     #[allow(clippy::too_many_arguments)]
     pub fn record_clipped(
-        &mut self,
+        &self,
         rec: &mut Recorder,
         param: &Buffer,
         grad: &Buffer,
         moments: &Moments,
-        rates: (f32, u32, u32, f32),
+        lr: f32,
         step: u32,
+        width: u32,
         radius: f32,
-        slot: usize,
-    ) -> Result<()> {
-        let n = moments.len;
-        let groups = n.div_ceil(256);
-        if self.scratch.len() <= slot {
-            self.scratch.resize_with(slot + 1, || None);
-        }
-        if self.scratch[slot].as_ref().is_none_or(|s| s.capacity < n) {
-            self.scratch[slot] = Some(ClipScratch::new(&self.gpu, crate::render::grow(n as u64))?);
-        }
-        let s = self.scratch[slot].as_ref().unwrap();
-        let push = UpdatePush {
+    ) {
+        assert!(
+            (1..=4).contains(&width) && moments.len.is_multiple_of(width),
+            "rows of {width} over {} elements",
+            moments.len
+        );
+        let push = ClippedPush {
+            param: param.address(),
             grad: grad.address(),
             m: moments.m.address(),
             v: moments.v.address(),
-            update: s.update.address(),
-            partial: s.partial.address(),
-            step: AdamStep::new(n, rates, step),
+            step: AdamStep::new(moments.len, (lr, 1, 1, lr), step),
+            width,
+            radius,
         };
-        rec.dispatch(&self.update, &push, dispatch_1d(groups));
-        rec.dispatch(
-            &self.reduce,
-            &ReducePush { values: s.partial.address(), total: s.total.address(), count: groups, pad: 0 },
-            [1, 1, 1],
-        );
-        let apply =
-            ApplyPush { param: param.address(), update: s.update.address(), total: s.total.address(), n, radius };
-        rec.dispatch(&self.apply, &apply, dispatch_1d(groups));
-        Ok(())
+        rec.dispatch(&self.clipped, &push, dispatch_1d((moments.len / width).div_ceil(256)));
     }
 }

@@ -45,6 +45,10 @@ pub struct TrainConfig {
     /// hundreds of steps to recolor a Gaussian.
     #[serde(default = "unit_gain")]
     pub color_lr_gain: f32,
+    /// Multiplies the scale and rotation learning rates (1: INRIA's); the removal's refinement
+    /// raises it for the same reason as `color_lr_gain`.
+    #[serde(default = "unit_gain")]
+    pub shape_lr_gain: f32,
 }
 
 fn unit_gain() -> f32 {
@@ -67,6 +71,7 @@ impl Default for TrainConfig {
             seed: 0,
             background: [0.0; 3],
             color_lr_gain: 1.0,
+            shape_lr_gain: 1.0,
         }
     }
 }
@@ -193,8 +198,8 @@ pub struct Trainer {
     pub profile: bool,
     /// Groups that get no update.
     pub frozen: Frozen,
-    /// When set, each geometry tensor's (means, scales, rotations) update per step is clipped to
-    /// this Euclidean norm (a trust region).
+    /// When set, each Gaussian's update per step of each geometry tensor (means, scales,
+    /// rotations) is clipped to this Euclidean norm (a trust region per Gaussian).
     pub trust_radius: Option<f32>,
     /// Render with the scene's full SH degree from the first step (fine-tuning a trained scene)
     /// instead of growing it one band per 1000 iterations.
@@ -403,8 +408,8 @@ impl Trainer {
         let (sh_dc, sh_rest) = self.sh_lrs();
         let groups = [
             group(&m.means, self.position_lr(), self.position_lr(), f.means),
-            group(&m.log_scales, LR_SCALE, LR_SCALE, f.log_scales),
-            group(&m.quats, LR_ROTATION, LR_ROTATION, f.quats),
+            group(&m.log_scales, self.cfg.shape_lr_gain * LR_SCALE, self.cfg.shape_lr_gain * LR_SCALE, f.log_scales),
+            group(&m.quats, self.cfg.shape_lr_gain * LR_ROTATION, self.cfg.shape_lr_gain * LR_ROTATION, f.quats),
             group(&m.opacity_logits, LR_OPACITY, LR_OPACITY, f.opacity),
             group(&m.sh, sh_dc, sh_rest, f.sh),
         ];
@@ -438,23 +443,22 @@ impl Trainer {
         }
         // bytes of the Adam passes; a clipped step also writes and reads back its update
         let adam_elements = |frozen: bool, m: &super::adam::Moments| if frozen { 0 } else { m.len as u64 };
-        let geometry_bytes = super::adam::BYTES_PER_ELEMENT + if self.trust_radius.is_some() { 8 } else { 0 };
-        let adam_bytes = geometry_bytes
+        let adam_bytes = super::adam::BYTES_PER_ELEMENT
             * (adam_elements(f.means, &m.means)
                 + adam_elements(f.log_scales, &m.log_scales)
-                + adam_elements(f.quats, &m.quats))
-            + super::adam::BYTES_PER_ELEMENT
-                * (adam_elements(f.opacity, &m.opacity_logits) + adam_elements(f.sh, &m.sh));
+                + adam_elements(f.quats, &m.quats)
+                + adam_elements(f.opacity, &m.opacity_logits)
+                + adam_elements(f.sh, &m.sh));
         let geometry = [
-            (f.means, &s.means, &g.means, &m.means, self.position_lr()),
-            (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, LR_SCALE),
-            (f.quats, &s.quats, &g.quats, &m.quats, LR_ROTATION),
+            (f.means, &s.means, &g.means, &m.means, self.position_lr(), 3),
+            (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, self.cfg.shape_lr_gain * LR_SCALE, 3),
+            (f.quats, &s.quats, &g.quats, &m.quats, self.cfg.shape_lr_gain * LR_ROTATION, 4),
         ];
-        for (slot, (frozen, param, grad, moments, lr)) in geometry.into_iter().enumerate() {
+        for (frozen, param, grad, moments, lr, width) in geometry {
             match (frozen, self.trust_radius) {
                 (true, _) => {}
                 (false, Some(radius)) => {
-                    self.adam.record_clipped(rec, param, grad, moments, (lr, 1, 1, lr), self.step, radius, slot)?
+                    self.adam.record_clipped(rec, param, grad, moments, lr, self.step, width, radius)
                 }
                 (false, None) => self.adam.record(rec, param, grad, moments, lr, self.step),
             }

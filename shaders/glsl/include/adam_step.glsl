@@ -1,4 +1,4 @@
-// One Adam step of one element, shared by adam.comp, adam_update.comp and
+// One Adam step of one element, shared by adam.comp, adam_clipped.comp and
 // project_backward_adam.comp so all follow PyTorch's formulation (as the INRIA reference uses)
 // exactly:
 //   m = b1 m + (1 - b1) g,  v = b2 v + (1 - b2) g^2,
