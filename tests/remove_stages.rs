@@ -278,9 +278,10 @@ fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
 }
 
 /// Color transfer on a fronto-parallel plane z = 5 seen by two translated cameras, where pixel and
-/// world coordinates are affinely related: at the true depth every target pixel that the source
-/// sees gets exactly the source photo's color of its surface point; off the source's image, in
-/// its hole, or at a depth 10 % off, nothing is transferred.
+/// world coordinates are affinely related: at the true depth every target pixel off the target's
+/// own hole keeps its own photo's color exactly (the own capture comes first); in the hole, every
+/// pixel that the source sees gets exactly the source photo's color of its surface point; off the
+/// source's image, in its hole, or at a depth 10 % off, nothing is transferred.
 #[test]
 fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
     use cogeo::removal::complete::transfer::{transfer, SourceView};
@@ -301,10 +302,14 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
         [0, 1, 2].map(|k| ctr[k] + r[0][k] * x + r[1][k] * y + r[2][k] * z)
     };
     let mut photo = vec![0f32; 3 * w * h];
+    // the target's own capture: the same surface, with a blue cast that tells it apart
+    let mut own_photo = vec![0f32; 3 * w * h];
     for p in 0..w * h {
         let c = color(world(&source_cam, p, 5.0));
+        let own = color(world(&target_cam, p, 5.0));
         for k in 0..3 {
             photo[k * w * h + p] = c[k] as f32;
+            own_photo[k * w * h + p] = own[k] as f32 + if k == 2 { 0.2 } else { 0.0 };
         }
     }
     let mut hole = vec![false; w * h];
@@ -316,13 +321,23 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
     let depth = vec![5.0f32; w * h];
     let alpha = vec![1.0f32; w * h];
     let sources = [
-        SourceView { camera: &target_cam, photo: &photo, hole: &hole, depth: &depth, alpha: &alpha },
+        SourceView { camera: &target_cam, photo: &own_photo, hole: &hole, depth: &depth, alpha: &alpha },
         SourceView { camera: &source_cam, photo: &photo, hole: &hole, depth: &depth, alpha: &alpha },
     ];
     let fill = vec![true; w * h];
     let t = transfer(0, &target_cam, &depth, &fill, &sources, 0.05);
-    let (mut found, mut blocked) = (0, 0);
+    let (mut found, mut blocked, mut own) = (0, 0, 0);
     for p in 0..w * h {
+        if !hole[p] {
+            // the point projects back onto this pixel's center, where Lanczos-3 is the sample
+            assert!(t.found[p], "pixel {p} off the hole did not take its own photo");
+            for k in 0..3 {
+                let (got, want) = (t.rgb[k * w * h + p], own_photo[k * w * h + p]);
+                assert!((got - want).abs() < 1e-5, "pixel {p} channel {k}: {got} vs its own photo's {want}");
+            }
+            own += 1;
+            continue;
+        }
         let pt = world(&target_cam, p, 5.0);
         let pc = source_cam.to_camera(pt);
         let (x, y) = (source_cam.fx * pc[0] / pc[2] + source_cam.cx, source_cam.fy * pc[1] / pc[2] + source_cam.cy);
@@ -340,7 +355,7 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
             found += 1;
         }
     }
-    assert!(found > 400 && blocked > 20, "found {found}, blocked {blocked}");
+    assert!(own > 1000 && found > 20 && blocked > 10, "own {own}, found {found}, blocked {blocked}");
     // a completed depth 10 % off does not match what the source rendered there
     let off = vec![5.5f32; w * h];
     let t = transfer(0, &target_cam, &off, &fill, &sources, 0.05);
