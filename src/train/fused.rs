@@ -4,7 +4,9 @@
 //! zeroed or read back. Apart, the projection backward and Adam move 2.5 GB per step at 1M SH-3
 //! Gaussians; fused, 1.5 GB. The same arithmetic as `Backward::record` + the MCMC regularizer +
 //! `Adam::record` per tensor (tests/train.rs compares the two paths); the trainer uses the passes
-//! apart only for the trust-region step, which needs each tensor's whole update before applying it.
+//! apart only for the trust-region step (`Adam::record_clipped`). That clip is per Gaussian now, so
+//! it could ride in this pass too; the removal's refinement is the only user and is not where time
+//! goes.
 
 use super::adam::{AdamStep, Moments};
 use crate::gpu::{dispatch_1d, Buffer, Gpu, MemoryKind, Recorder};

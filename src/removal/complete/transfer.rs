@@ -2,9 +2,8 @@
 //! back-projected at its completed depth; where a training view saw that surface point (outside
 //! that view's hole, at the depth that view's original render has there; view i itself first,
 //! then the others), the point's color is taken from that view's captured image instead of being
-//! invented. Only a good depth
-//! puts the point where the other view really saw it, so this is where depth guidance pays off in
-//! color, not just in geometry.
+//! invented. Only a good depth puts the point where another view really saw it, so this is where
+//! depth guidance pays off in color, not just in geometry.
 
 use super::photo_depth::{back_project, sees};
 use crate::image_ops::sample_lanczos3;
@@ -51,10 +50,10 @@ pub fn transfer(
     // the target itself first, then the others by distance of their camera centers to the target's
     let mut order: Vec<usize> = (0..sources.len()).collect();
     let dist = |j: usize| {
-        let c = sources[j].camera.center();
         if j == target {
             return -1.0;
         }
+        let c = sources[j].camera.center();
         (0..3).map(|k| (c[k] - center[k]).powi(2)).sum::<f64>()
     };
     order.sort_by(|&a, &b| dist(a).total_cmp(&dist(b)));
