@@ -99,6 +99,16 @@ fn loss_value_and_gradient_match_cpu() {
     }
 }
 
+/// The f64 twin of one Adam step of one element (PyTorch's formulation): updates the moments `m`
+/// and `v` with gradient `g` and returns the update to subtract at `rate`.
+fn adam_update_f64(m: &mut f64, v: &mut f64, g: f64, step: u32, rate: f64) -> f64 {
+    let (b1, b2) = (BETA1 as f64, BETA2 as f64);
+    *m = b1 * *m + (1.0 - b1) * g;
+    *v = b2 * *v + (1.0 - b2) * g * g;
+    let (mh, vh) = (*m / (1.0 - b1.powi(step as i32)), *v / (1.0 - b2.powi(step as i32)));
+    rate * mh / (vh.sqrt() + EPS as f64)
+}
+
 /// Five Adam steps on `n` elements with rates (lr, period, head, tail factor) against an f64 twin;
 /// returns the max error.
 fn check_adam(n: usize, period: u32, head: u32, tail: f32) -> f64 {
@@ -117,15 +127,9 @@ fn check_adam(n: usize, period: u32, head: u32, tail: f32) -> f64 {
         let mut rec = Recorder::new(&g).unwrap();
         adam.record_split(&mut rec, &p_buf, &g_buf, &moments, (lr, period, head, lr * tail), step);
         rec.submit_and_wait().unwrap();
-        let (b1, b2) = (BETA1 as f64, BETA2 as f64);
         for i in 0..n {
-            let gi = grad[i] as f64;
-            m[i] = b1 * m[i] + (1.0 - b1) * gi;
-            v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
-            let mh = m[i] / (1.0 - b1.powi(step as i32));
-            let vh = v[i] / (1.0 - b2.powi(step as i32));
             let rate = if (i as u32 % period) < head { lr } else { lr * tail } as f64;
-            pd[i] -= rate * mh / (vh.sqrt() + EPS as f64);
+            pd[i] -= adam_update_f64(&mut m[i], &mut v[i], grad[i] as f64, step, rate);
         }
     }
     p = p_buf.download(&g, n).unwrap();
@@ -177,17 +181,8 @@ fn trust_region_clips_each_gaussians_update_to_the_radius() {
             let mut rec = Recorder::new(&g).unwrap();
             adam.record_clipped(&mut rec, &p_buf, &g_buf, &moments, lr as f32, step, width as u32, radius as f32);
             rec.submit_and_wait().unwrap();
-            let (b1, b2) = (BETA1 as f64, BETA2 as f64);
             let before = p.clone();
-            let u: Vec<f64> = (0..n)
-                .map(|i| {
-                    let gi = grad[i] as f64;
-                    m[i] = b1 * m[i] + (1.0 - b1) * gi;
-                    v[i] = b2 * v[i] + (1.0 - b2) * gi * gi;
-                    lr * (m[i] / (1.0 - b1.powi(step as i32)))
-                        / ((v[i] / (1.0 - b2.powi(step as i32))).sqrt() + EPS as f64)
-                })
-                .collect();
+            let u: Vec<f64> = (0..n).map(|i| adam_update_f64(&mut m[i], &mut v[i], grad[i] as f64, step, lr)).collect();
             for r in 0..rows {
                 let row = &u[r * width..(r + 1) * width];
                 let norm = row.iter().map(|x| x * x).sum::<f64>().sqrt();

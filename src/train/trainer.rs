@@ -302,6 +302,11 @@ impl Trainer {
         (self.cfg.color_lr_gain * LR_SH_DC, self.cfg.color_lr_gain * LR_SH_REST)
     }
 
+    /// Learning rates of the log-scales and of the rotations.
+    fn shape_lrs(&self) -> (f32, f32) {
+        (self.cfg.shape_lr_gain * LR_SCALE, self.cfg.shape_lr_gain * LR_ROTATION)
+    }
+
     fn active_sh_degree(&self) -> u32 {
         if self.full_sh {
             return self.scene.sh_degree;
@@ -406,10 +411,11 @@ impl Trainer {
         let (s, m, f) = (&self.scene, &self.moments, self.frozen);
         let group = |moments, lr, lr_tail, frozen| GroupStep { moments, lr, lr_tail, frozen };
         let (sh_dc, sh_rest) = self.sh_lrs();
+        let (scale_lr, rotation_lr) = self.shape_lrs();
         let groups = [
             group(&m.means, self.position_lr(), self.position_lr(), f.means),
-            group(&m.log_scales, self.cfg.shape_lr_gain * LR_SCALE, self.cfg.shape_lr_gain * LR_SCALE, f.log_scales),
-            group(&m.quats, self.cfg.shape_lr_gain * LR_ROTATION, self.cfg.shape_lr_gain * LR_ROTATION, f.quats),
+            group(&m.log_scales, scale_lr, scale_lr, f.log_scales),
+            group(&m.quats, rotation_lr, rotation_lr, f.quats),
             group(&m.opacity_logits, LR_OPACITY, LR_OPACITY, f.opacity),
             group(&m.sh, sh_dc, sh_rest, f.sh),
         ];
@@ -441,7 +447,7 @@ impl Trainer {
         if mcmc {
             self.mcmc.record_regularize(rec, s, g, regularizer);
         }
-        // bytes of the Adam passes; a clipped step also writes and reads back its update
+        // bytes of the Adam passes (the clipped step moves the same per element)
         let adam_elements = |frozen: bool, m: &super::adam::Moments| if frozen { 0 } else { m.len as u64 };
         let adam_bytes = super::adam::BYTES_PER_ELEMENT
             * (adam_elements(f.means, &m.means)
@@ -449,10 +455,11 @@ impl Trainer {
                 + adam_elements(f.quats, &m.quats)
                 + adam_elements(f.opacity, &m.opacity_logits)
                 + adam_elements(f.sh, &m.sh));
+        let (scale_lr, rotation_lr) = self.shape_lrs();
         let geometry = [
             (f.means, &s.means, &g.means, &m.means, self.position_lr(), 3),
-            (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, self.cfg.shape_lr_gain * LR_SCALE, 3),
-            (f.quats, &s.quats, &g.quats, &m.quats, self.cfg.shape_lr_gain * LR_ROTATION, 4),
+            (f.log_scales, &s.log_scales, &g.log_scales, &m.log_scales, scale_lr, 3),
+            (f.quats, &s.quats, &g.quats, &m.quats, rotation_lr, 4),
         ];
         for (frozen, param, grad, moments, lr, width) in geometry {
             match (frozen, self.trust_radius) {
