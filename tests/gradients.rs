@@ -12,8 +12,8 @@ use cogeo::render::backward::{Backward, PixelGradients, SceneGradients};
 use cogeo::render::reference::render_reference;
 use cogeo::render::{BlendLayout, Rasterizer, RenderSettings, SceneBuffers};
 use cogeo::rng::Rng;
-use cogeo::scene::{Camera, GaussianScene};
-use common::{gpu, logit};
+use cogeo::scene::{logit, Camera, GaussianScene};
+use common::gpu;
 
 struct Weights {
     rgb: Vec<f32>,

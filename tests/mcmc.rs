@@ -8,9 +8,9 @@ use cogeo::render::backward::SceneGradients;
 use cogeo::render::SceneBuffers;
 use cogeo::rng::Rng;
 use cogeo::scene::camera::rotation_from_qvec;
-use cogeo::scene::GaussianScene;
+use cogeo::scene::{logit, GaussianScene};
 use cogeo::train::mcmc::McmcPasses;
-use common::{finite_differences, gpu, logit};
+use common::{finite_differences, gpu};
 
 fn scene_of(
     n: usize,

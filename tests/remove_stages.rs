@@ -470,7 +470,7 @@ fn hole_fill_keeps_only_kept_objects_not_the_background_left_behind() {
                 scene.normals.push([0.0; 3]);
                 scene.log_scales.push([(0.7 * z / cam.fx as f32).ln(); 3]);
                 scene.quats.push([1.0, 0.0, 0.0, 0.0]);
-                scene.opacity_logits.push(common::logit(0.99));
+                scene.opacity_logits.push(cogeo::scene::logit(0.99));
                 scene.sh.extend([(color - 0.5) / cogeo::scene::SH_C0 as f32; 3]);
                 labels.push(label);
             }

@@ -6,7 +6,7 @@ pub mod onnx;
 
 use cogeo::gpu::{DeviceChoice, Gpu};
 use cogeo::rng::Rng;
-use cogeo::scene::{Camera, GaussianScene};
+use cogeo::scene::{logit, Camera, GaussianScene};
 use std::path::{Path, PathBuf};
 
 /// A GPU context that asserts, when dropped at the end of a passing test, that the validation layer
@@ -53,10 +53,6 @@ pub fn gpu() -> TestGpu {
 pub fn shared_data(rel: &str) -> Option<PathBuf> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("shared").join("data").join(rel);
     p.exists().then_some(p)
-}
-
-pub fn logit(p: f64) -> f32 {
-    (p / (1.0 - p)).ln() as f32
 }
 
 /// What kinds of Gaussians a random scene mixes in.
