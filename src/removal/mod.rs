@@ -12,7 +12,8 @@
 //!    corrects covered but poorly rendered ones; only the rest of the fill stays invented.
 //! 4. Fusion and pruning (fuse.rs): completed depth back-projected into new Gaussians; sparse
 //!    background outliers near them pruned.
-//! 5. Refinement (refine.rs): color first, then trust-region clipped geometry.
+//! 5. Refinement (refine.rs): color first, then trust-region clipped geometry; each view's hole
+//!    weighs more in the loss than the rest of it, whose target is the scene's own render.
 //!
 //! Each stage takes and returns plain data; each can be switched off for ablations (`Stages`).
 
@@ -220,7 +221,7 @@ pub fn remove(
         (result, fusion, pruned, prune_used) = (patch.scene, Some(patch.report), patch.pruned, patch.prune);
         clock.lap("fuse");
         // 4b. which invented pixels each view's refinement keeps
-        let masks = if opts.stages.refine && !patch.owned.is_empty() {
+        let consensus_weights = if opts.stages.refine && !patch.owned.is_empty() {
             let views: Vec<ConsensusView> = (0..completed.len())
                 .map(|i| ConsensusView {
                     camera: &cameras[i],
@@ -240,12 +241,14 @@ pub fn remove(
         } else {
             None
         };
-        // 5. refinement
+        // 5. refinement, the holes weighing more than the rest of each view
         if opts.stages.refine {
+            let holes: Vec<&[bool]> = masked.iter().map(|m| m.hole.as_slice()).collect();
+            let masks = refine::loss_weights(&holes, consensus_weights, opts.refine.hole_weight);
             let targets: Vec<Vec<f32>> = completed.iter().map(|k| k.rgb.clone()).collect();
             let total = opts.refine.iters as usize;
             let (refined, report) =
-                refine::refine(gpu, &result, cameras, targets, masks.as_deref(), extent, &opts.refine, |it| {
+                refine::refine(gpu, &result, cameras, targets, Some(&masks), extent, &opts.refine, |it| {
                     progress("refine", it as usize, total)
                 })?;
             result = refined;
