@@ -182,10 +182,10 @@ pub fn run(family: Family, input: &[u8], valid: &Seeds) -> Result<(), String> {
         Family::FlagValues => {
             // byte 0 picks the flag; clap hands over UTF-8 only and splits --labels at commas
             let text = String::from_utf8_lossy(input.get(1..).unwrap_or(&[])).into_owned();
-            if input.first().is_some_and(|b| b % 2 == 0) {
-                cogeo::flag_values::parse_rgb(&text).map(|_| ())
-            } else {
-                text.split(',').try_for_each(|s| cogeo::flag_values::parse_object_label(s).map(|_| ()))
+            match input.first().map_or(0, |b| b % 3) {
+                0 => cogeo::flag_values::parse_rgb(&text).map(|_| ()),
+                1 => text.split(',').try_for_each(|s| cogeo::flag_values::parse_object_label(s).map(|_| ())),
+                _ => cogeo::flag_values::parse_weight(&text).map(|_| ()),
             }
         }
     }
@@ -211,7 +211,7 @@ impl Seeds {
             cameras_json: vec![plain(super::fuzz_seeds::cameras_json_seed())],
             images: super::fuzz_seeds::image_seeds(),
             prompt: vec![plain(br#"{"statue": [0.5, -1.25, 3e-3, 0], "bench": [1, 2, 3, 4], "tree": []}"#.to_vec())],
-            flags: vec![flag(0, "0.5,0.25,1"), flag(1, "1,2"), flag(1, "3"), flag(0, "0,0,0")],
+            flags: vec![flag(0, "0.5,0.25,1"), flag(1, "1,2"), flag(1, "3"), flag(0, "0,0,0"), flag(2, "4")],
         }
     }
 

@@ -24,3 +24,12 @@ pub fn parse_object_label(s: &str) -> Result<u8, String> {
         _ => Err(format!("label {v} is out of range: object labels are 1..=254")),
     }
 }
+
+/// A weight: a finite number >= 0 (`--refine-hole-weight`; 0 leaves those pixels out).
+pub fn parse_weight(s: &str) -> Result<f32, String> {
+    let v: f32 = s.trim().parse().map_err(|_| format!("expected a number >= 0, got {s:?}"))?;
+    if !v.is_finite() || v < 0.0 {
+        return Err(format!("expected a finite number >= 0, got {s:?}"));
+    }
+    Ok(v)
+}

@@ -213,7 +213,13 @@ fn flag_values_say_what_is_wrong() {
     rejected(Family::FlagValues, &labels("1,,2"), &seeds, "expected an object label");
     rejected(Family::FlagValues, &rgb("nan,0,0"), &seeds, "in [0, 1]");
     rejected(Family::FlagValues, &rgb("0.5,0.5"), &seeds, "three values");
+    let weight = |s: &str| std::iter::once(2u8).chain(s.bytes()).collect::<Vec<_>>();
+    rejected(Family::FlagValues, &weight("-1"), &seeds, "finite number >= 0, got \"-1\"");
+    rejected(Family::FlagValues, &weight("inf"), &seeds, "finite number >= 0");
+    rejected(Family::FlagValues, &weight("four"), &seeds, "expected a number >= 0, got \"four\"");
     assert_eq!(check(Family::FlagValues, &labels("1, 2,254"), &seeds), None);
+    assert_eq!(check(Family::FlagValues, &weight("0"), &seeds), None);
+    assert_eq!(check(Family::FlagValues, &weight(" 4.5"), &seeds), None);
 }
 
 #[test]

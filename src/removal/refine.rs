@@ -29,8 +29,8 @@ pub const COLOR_LR_GAIN: f32 = 8.0;
 pub const SHAPE_LR_GAIN: f32 = 2.0;
 
 /// Loss weight of a hole pixel relative to the rest of its view. Outside the hole the target is
-/// the scene's own render, an anchor that only keeps the background; the hole's pixels, 5-15 %
-/// of a view, are the ones carrying news (the captured colors transferred from other views). In
+/// the scene's own render, an anchor that only keeps the background; the hole's pixels, 6-18 %
+/// of a view on the bench scenes, are the ones carrying news (the captured colors transferred from other views). In
 /// the plain weighted mean the anchor outweighs them on every Gaussian the two share, such as the
 /// background behind an object that some views saw and others did not. Held-out seen-elsewhere
 /// PSNR on bench scenes one / two / three at 1, 2, 4 and 8: 27.86 / 26.72 / 26.95, 28.17 /
@@ -95,7 +95,7 @@ pub fn loss_weights(holes: &[&[bool]], consensus: Option<Vec<Vec<f32>>>, hole_we
 }
 
 /// Refines `scene` towards `targets` (planar RGB per camera), each pixel's loss weighted by
-/// `masks` where given (consensus.rs). `extent` scales the position learning rate as in training.
+/// `masks` where given (`loss_weights`). `extent` scales the position learning rate as in training.
 #[allow(clippy::too_many_arguments)]
 pub fn refine(
     gpu: &Gpu,
