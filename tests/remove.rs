@@ -66,6 +66,7 @@ fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
     assert!(g["removed"].as_u64().unwrap() > 0);
     assert!(full["fusion"]["patch_gaussians"].as_u64().unwrap() > 0);
     assert_eq!(full["refine"]["iters"].as_u64().unwrap(), 150);
+    assert_eq!(full["options"]["refine"]["hole_weight"].as_f64().unwrap(), cogeo::removal::refine::HOLE_WEIGHT as f64);
     assert!(full["refine"]["psnr_after"].as_f64().unwrap() > full["refine"]["psnr_before"].as_f64().unwrap());
     for stage in ["masks", "complete", "fuse", "refine"] {
         assert!(full["seconds"][stage].as_f64().is_some(), "no time for {stage}");
@@ -86,6 +87,14 @@ fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("label(s) [7]"));
+    // a negative loss weight is refused before any work, naming the flag
+    let out = std::process::Command::new(exe)
+        .args(["remove", "--scene", &tagged, "--data", &data, "--labels", "1", "--out", &path("none")])
+        .args(["--refine-hole-weight", "-1"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--refine-hole-weight") && err.contains(">= 0"), "{err}");
 
     // bring-your-own inpainting: the exact object-free views as a perfect inpainter's output are
     // used exactly inside the holes, the render elsewhere, and beat the smooth built-in fill

@@ -95,7 +95,7 @@ pub struct RemovalFlags {
     /// Refinement loss weight of each view's hole pixels relative to its other pixels (>= 0).
     /// Outside the hole the target is the scene's own render, which only anchors the background;
     /// the hole is a tenth or so of a view and carries the colors the other views captured.
-    #[arg(long, default_value_t = cogeo::removal::refine::HOLE_WEIGHT, value_parser = cogeo::flag_values::parse_weight)]
+    #[arg(long, default_value_t = cogeo::removal::refine::HOLE_WEIGHT, value_parser = cogeo::flag_values::parse_weight, allow_negative_numbers = true)]
     pub refine_hole_weight: f32,
     /// Trust region of the second half: each Gaussian's per-step update of its position, of its
     /// log-scales and of its rotation is clipped to this Euclidean norm.
