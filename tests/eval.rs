@@ -116,14 +116,7 @@ fn floater_score_counts_gaussians_off_the_true_surface() {
     let depth = vec![vec![5.0f32; 1200]; 2];
     let region = vec![vec![true; 1200]; 2];
     let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
-    let mut push = |p: [f32; 3], logit: f32| {
-        scene.means.push(p);
-        scene.normals.push([0.0; 3]);
-        scene.log_scales.push([-3.0; 3]);
-        scene.quats.push([1.0, 0.0, 0.0, 0.0]);
-        scene.opacity_logits.push(logit);
-        scene.sh.extend([0.0; 3]);
-    };
+    let mut push = |p: [f32; 3], logit: f32| scene.push(p, [-3.0; 3], [1.0, 0.0, 0.0, 0.0], logit, &[0.0; 3]);
     push([0.2, 0.1, 5.0], 0.0); // on the plane
     push([0.2, 0.1, 5.1], 0.0); // 2 % behind: within tau
     push([0.2, 0.1, 3.0], 2.0); // floating
@@ -307,12 +300,7 @@ fn eval_cli_on_a_synth_dataset() {
     };
     let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
     for (p, logit) in [(world(z), 1.0f32), (world(0.5 * z), 1.0)] {
-        scene.means.push(p);
-        scene.normals.push([0.0; 3]);
-        scene.log_scales.push([-4.0; 3]);
-        scene.quats.push([1.0, 0.0, 0.0, 0.0]);
-        scene.opacity_logits.push(logit);
-        scene.sh.extend([0.0; 3]);
+        scene.push(p, [-4.0; 3], [1.0, 0.0, 0.0, 0.0], logit, &[0.0; 3]);
     }
     let ply = root.join("floaters.ply");
     cogeo::scene::ply::write_ply(&scene, &ply).unwrap();

@@ -64,16 +64,11 @@ fn scene(seed: u64, n: usize, degree: u32) -> GaussianScene {
         } else {
             [rng.range(-1.3, 1.3), rng.range(-0.9, 0.9), rng.range(-1.0, 1.0)]
         };
-        s.means.push(p.map(|v| v as f32));
-        s.normals.push([0.0; 3]);
-        s.log_scales.push([0, 1, 2].map(|_| rng.range(-2.6, -1.4) as f32));
-        s.quats.push([0, 1, 2, 3].map(|_| rng.normal() as f32));
-        s.opacity_logits.push(logit(rng.range(0.15, 0.85)));
-        for b in 0..k {
-            for _ in 0..3 {
-                s.sh.push((if b == 0 { 1.0 } else { 0.4 } * rng.normal()) as f32);
-            }
-        }
+        let log_scales = [0, 1, 2].map(|_| rng.range(-2.6, -1.4) as f32);
+        let quat = [0, 1, 2, 3].map(|_| rng.normal() as f32);
+        let opacity = logit(rng.range(0.15, 0.85));
+        let sh: Vec<f32> = (0..3 * k).map(|i| (if i < 3 { 1.0 } else { 0.4 } * rng.normal()) as f32).collect();
+        s.push(p.map(|v| v as f32), log_scales, quat, opacity, &sh);
     }
     s
 }

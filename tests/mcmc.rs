@@ -20,12 +20,7 @@ fn scene_of(
     let mut s = GaussianScene { sh_degree: 0, ..Default::default() };
     for i in 0..n {
         let (log_scale, quat, opacity_logit) = gaussian(i, rng);
-        s.means.push([0.0; 3]);
-        s.normals.push([0.0; 3]);
-        s.log_scales.push(log_scale);
-        s.quats.push(quat);
-        s.opacity_logits.push(opacity_logit);
-        s.sh.extend_from_slice(&[0.0; 3]);
+        s.push([0.0; 3], log_scale, quat, opacity_logit, &[0.0; 3]);
     }
     s
 }

@@ -259,12 +259,8 @@ fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
     use cogeo::scene::GaussianScene;
     let mut rest = GaussianScene { sh_degree: 1, ..Default::default() };
     for (i, p) in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0]].iter().enumerate() {
-        rest.means.push(*p);
-        rest.normals.push([0.0; 3]);
-        rest.log_scales.push([i as f32; 3]);
-        rest.quats.push([1.0, i as f32, 0.0, 0.0]);
-        rest.opacity_logits.push(-(i as f32));
-        rest.sh.extend((0..12).map(|k| (10 * i + k) as f32));
+        let sh: Vec<f32> = (0..12).map(|k| (10 * i + k) as f32).collect();
+        rest.push(*p, [i as f32; 3], [1.0, i as f32, 0.0, 0.0], -(i as f32), &sh);
     }
     let removed = [[0.9f32, 0.2, 0.0], [0.1, 1.6, 0.3], [-0.2, 0.1, 0.0]];
     let copies = cogeo::removal::fuse::nearest_copies(&rest, &removed);
@@ -466,12 +462,8 @@ fn hole_fill_keeps_only_kept_objects_not_the_background_left_behind() {
         for py in y0..y1 {
             for px in x0..x1 {
                 let p = cam.image_point(px as f64 + 0.5, py as f64 + 0.5, z as f64);
-                scene.means.push(p.map(|v| v as f32));
-                scene.normals.push([0.0; 3]);
-                scene.log_scales.push([(0.7 * z / cam.fx as f32).ln(); 3]);
-                scene.quats.push([1.0, 0.0, 0.0, 0.0]);
-                scene.opacity_logits.push(cogeo::scene::logit(0.99));
-                scene.sh.extend([(color - 0.5) / cogeo::scene::SH_C0 as f32; 3]);
+                let (scale, dc) = ((0.7 * z / cam.fx as f32).ln(), (color - 0.5) / cogeo::scene::SH_C0 as f32);
+                scene.push(p.map(|v| v as f32), [scale; 3], [1.0, 0.0, 0.0, 0.0], cogeo::scene::logit(0.99), &[dc; 3]);
                 labels.push(label);
             }
         }

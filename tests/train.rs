@@ -127,12 +127,9 @@ fn one_view_scene(
     let mut scene = GaussianScene { sh_degree, ..Default::default() };
     let coefficients = 3 * (sh_degree as usize + 1).pow(2);
     for _ in 0..count {
-        scene.means.push([rng.range(-1.0, 1.0) as f32, rng.range(-0.8, 0.8) as f32, rng.range(-0.5, 0.5) as f32]);
-        scene.normals.push([0.0; 3]);
-        scene.log_scales.push([-2.5; 3]);
-        scene.quats.push(quat);
-        scene.opacity_logits.push(0.0);
-        scene.sh.extend((0..coefficients).map(|_| (0.5 * rng.normal()) as f32));
+        let mean = [rng.range(-1.0, 1.0) as f32, rng.range(-0.8, 0.8) as f32, rng.range(-0.5, 0.5) as f32];
+        let sh: Vec<f32> = (0..coefficients).map(|_| (0.5 * rng.normal()) as f32).collect();
+        scene.push(mean, [-2.5; 3], quat, 0.0, &sh);
     }
     let camera = Camera::look_at("v", 40, 30, 60.0, [0.0, -0.2, -3.0], [0.0; 3], [0.0, -1.0, 0.0]);
     let image: Vec<f32> = (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect();
@@ -229,16 +226,12 @@ fn fused_step_matches_the_passes_apart() {
     for i in 0..400 {
         // one in eight far to the side: culled by both views
         let side = if i % 8 == 0 { 6.0 } else { 0.0 };
-        scene.means.push([
-            (rng.range(-1.0, 1.0) + side) as f32,
-            rng.range(-0.8, 0.8) as f32,
-            rng.range(-0.5, 0.5) as f32,
-        ]);
-        scene.normals.push([0.0; 3]);
-        scene.log_scales.push([rng.range(-3.0, -2.0) as f32, rng.range(-3.0, -2.0) as f32, -2.5]);
-        scene.quats.push([1.0, rng.range(-0.3, 0.3) as f32, rng.range(-0.3, 0.3) as f32, 0.1]);
-        scene.opacity_logits.push(rng.range(-1.0, 1.0) as f32);
-        scene.sh.extend((0..48).map(|_| (0.3 * rng.normal()) as f32));
+        let mean = [(rng.range(-1.0, 1.0) + side) as f32, rng.range(-0.8, 0.8) as f32, rng.range(-0.5, 0.5) as f32];
+        let log_scales = [rng.range(-3.0, -2.0) as f32, rng.range(-3.0, -2.0) as f32, -2.5];
+        let quat = [1.0, rng.range(-0.3, 0.3) as f32, rng.range(-0.3, 0.3) as f32, 0.1];
+        let opacity = rng.range(-1.0, 1.0) as f32;
+        let sh: Vec<f32> = (0..48).map(|_| (0.3 * rng.normal()) as f32).collect();
+        scene.push(mean, log_scales, quat, opacity, &sh);
     }
     let view = |name: &str, eye: [f64; 3], rng: &mut Rng| View {
         camera: Camera::look_at(name, 40, 30, 60.0, eye, [0.0; 3], [0.0, -1.0, 0.0]),

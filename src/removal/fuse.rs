@@ -314,20 +314,15 @@ pub fn patch_gaussians(points: &[PatchPoint], sh_degree: u32, opacity: f32) -> G
     let mut s = GaussianScene { sh_degree, ..Default::default() };
     let logit = (opacity / (1.0 - opacity)).ln();
     for p in points {
-        s.means.push(p.position.map(|v| v as f32));
-        s.normals.push([0.0; 3]);
         let (log_scales, quat) = match p.steps {
             Some(steps) => surfel_shape(steps, 0.6),
             None => ([(p.footprint.max(1e-6) * 0.6).ln() as f32; 3], [1.0, 0.0, 0.0, 0.0]),
         };
-        s.log_scales.push(log_scales);
-        s.quats.push(quat);
-        s.opacity_logits.push(logit);
-        for b in 0..k {
-            for c in 0..3 {
-                s.sh.push(if b == 0 { ((p.rgb[c] as f64 - 0.5) / SH_C0) as f32 } else { 0.0 });
-            }
+        let mut sh = vec![0.0; 3 * k];
+        for c in 0..3 {
+            sh[c] = ((p.rgb[c] as f64 - 0.5) / SH_C0) as f32;
         }
+        s.push(p.position.map(|v| v as f32), log_scales, quat, logit, &sh);
     }
     s
 }
@@ -386,12 +381,13 @@ pub fn nearest_copies(remaining: &GaussianScene, removed_means: &[[f32; 3]]) -> 
     let k = remaining.sh_coeffs() * 3;
     for p in removed_means {
         let j = tree.nearest_one::<SquaredEuclidean>(&p.map(|v| v as f64)).item as usize;
-        out.means.push(*p);
-        out.normals.push([0.0; 3]);
-        out.log_scales.push(remaining.log_scales[j]);
-        out.quats.push(remaining.quats[j]);
-        out.opacity_logits.push(remaining.opacity_logits[j]);
-        out.sh.extend_from_slice(&remaining.sh[j * k..(j + 1) * k]);
+        out.push(
+            *p,
+            remaining.log_scales[j],
+            remaining.quats[j],
+            remaining.opacity_logits[j],
+            &remaining.sh[j * k..(j + 1) * k],
+        );
     }
     out
 }

@@ -10,18 +10,11 @@ fn rgb_to_dc(c: f64) -> f32 {
 
 /// Appends a flat-ish Gaussian at `p` with color `rgb`, scale `s` (sigma), and thin axis `thin`.
 fn push(scene: &mut GaussianScene, p: [f64; 3], rgb: [f64; 3], s: [f64; 3], opacity: f64, rng: &mut Rng) {
-    scene.means.push(p.map(|v| v as f32));
-    scene.normals.push([0.0; 3]);
-    scene.log_scales.push(s.map(|v| v.ln() as f32));
     let q = [1.0 + 0.05 * rng.normal(), 0.05 * rng.normal(), 0.05 * rng.normal(), 0.05 * rng.normal()];
-    scene.quats.push(q.map(|v| v as f32));
-    scene.opacity_logits.push(logit(opacity));
-    let k = scene.sh_coeffs();
-    for b in 0..k {
-        for c in 0..3 {
-            scene.sh.push(if b == 0 { rgb_to_dc(rgb[c]) } else { (0.02 * rng.normal()) as f32 });
-        }
-    }
+    let sh: Vec<f32> = (0..3 * scene.sh_coeffs())
+        .map(|i| if i < 3 { rgb_to_dc(rgb[i]) } else { (0.02 * rng.normal()) as f32 })
+        .collect();
+    scene.push(p.map(|v| v as f32), s.map(|v| v.ln() as f32), q.map(|v| v as f32), logit(opacity), &sh);
 }
 
 /// The default demo scene (about 60k Gaussians, SH degree 1).

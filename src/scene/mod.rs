@@ -94,6 +94,18 @@ impl GaussianScene {
         sh_coeffs(self.sh_degree)
     }
 
+    /// Appends one Gaussian (normal 0, no extra properties). `sh` holds its 3 x `sh_coeffs()`
+    /// coefficients as `self.sh` stores them: basis function b's r, g, b at 3b..3b + 3.
+    pub fn push(&mut self, mean: [f32; 3], log_scales: [f32; 3], quat: [f32; 4], opacity_logit: f32, sh: &[f32]) {
+        assert_eq!(sh.len(), 3 * self.sh_coeffs(), "SH coefficients of one Gaussian at degree {}", self.sh_degree);
+        self.means.push(mean);
+        self.normals.push([0.0; 3]);
+        self.log_scales.push(log_scales);
+        self.quats.push(quat);
+        self.opacity_logits.push(opacity_logit);
+        self.sh.extend_from_slice(sh);
+    }
+
     /// Checks what rendering needs: at least one Gaussian, finite parameters, non-zero quaternions.
     /// `what` names the source in the error (usually the file path).
     pub fn validate(&self, what: &str) -> Result<()> {

@@ -278,13 +278,9 @@ mod tests {
     fn relocation_moves_dead_onto_live_and_grows_to_budget() {
         let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
         for i in 0..100 {
-            scene.means.push([i as f32, 0.0, 0.0]);
-            scene.normals.push([0.0; 3]);
-            scene.log_scales.push([-2.0; 3]);
-            scene.quats.push([1.0, 0.0, 0.0, 0.0]);
             // every 4th is dead
-            scene.opacity_logits.push(if i % 4 == 0 { logit(0.001) } else { logit(0.6) });
-            scene.sh.extend_from_slice(&[i as f32, 0.0, 0.0]);
+            let opacity = if i % 4 == 0 { logit(0.001) } else { logit(0.6) };
+            scene.push([i as f32, 0.0, 0.0], [-2.0; 3], [1.0, 0.0, 0.0, 0.0], opacity, &[i as f32, 0.0, 0.0]);
         }
         let mut rng = Rng::new(3);
         let (out, keep, stats) = relocate_and_grow(&scene, 103, &mut rng).unwrap();

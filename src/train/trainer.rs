@@ -130,16 +130,11 @@ pub fn init_from_points(points: &[Point3D], sh_degree: u32) -> Result<GaussianSc
         let nearest = tree.nearest_n::<SquaredEuclidean>(&p.xyz, 4);
         let d2: f64 = nearest.iter().skip(1).map(|n| n.distance).sum::<f64>() / 3.0;
         let s = d2.max(1e-7).sqrt().ln() as f32;
-        scene.means.push(p.xyz.map(|v| v as f32));
-        scene.normals.push([0.0; 3]);
-        scene.log_scales.push([s; 3]);
-        scene.quats.push([1.0, 0.0, 0.0, 0.0]);
-        scene.opacity_logits.push(logit(0.1));
-        for b in 0..k {
-            for c in 0..3 {
-                scene.sh.push(if b == 0 { ((p.rgb[c] as f64 / 255.0 - 0.5) / SH_C0) as f32 } else { 0.0 });
-            }
+        let mut sh = vec![0.0; 3 * k];
+        for c in 0..3 {
+            sh[c] = ((p.rgb[c] as f64 / 255.0 - 0.5) / SH_C0) as f32;
         }
+        scene.push(p.xyz.map(|v| v as f32), [s; 3], [1.0, 0.0, 0.0, 0.0], logit(0.1), &sh);
     }
     Ok(scene)
 }

@@ -83,17 +83,9 @@ pub fn random_scene(seed: u64, sh_degree: u32, mix: SceneMix) -> GaussianScene {
     let mut scene = GaussianScene { sh_degree, ..Default::default() };
     let k = scene.sh_coeffs();
     let mut add = |rng: &mut Rng, pos: [f64; 3], log_scale: [f64; 3], opacity_logit: f32| {
-        scene.means.push(pos.map(|v| v as f32));
-        scene.normals.push([0.0; 3]);
-        scene.log_scales.push(log_scale.map(|v| v as f32));
-        scene.quats.push([rng.normal() as f32, rng.normal() as f32, rng.normal() as f32, rng.normal() as f32]);
-        scene.opacity_logits.push(opacity_logit);
-        for b in 0..k {
-            for _ in 0..3 {
-                let scale = if b == 0 { 1.2 } else { 0.3 };
-                scene.sh.push((scale * rng.normal()) as f32);
-            }
-        }
+        let quat = [rng.normal() as f32, rng.normal() as f32, rng.normal() as f32, rng.normal() as f32];
+        let sh: Vec<f32> = (0..3 * k).map(|i| (if i < 3 { 1.2 } else { 0.3 } * rng.normal()) as f32).collect();
+        scene.push(pos.map(|v| v as f32), log_scale.map(|v| v as f32), quat, opacity_logit, &sh);
     };
     let spread = |rng: &mut Rng| [rng.range(-2.0, 2.0), rng.range(-1.5, 1.5), rng.range(-1.5, 2.0)];
     for _ in 0..mix.normal {

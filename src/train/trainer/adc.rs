@@ -26,12 +26,7 @@ impl Trainer {
                     mean: [f32; 3],
                     log_scale: [f32; 3],
                     carried: bool| {
-            out.means.push(mean);
-            out.normals.push([0.0; 3]);
-            out.log_scales.push(log_scale);
-            out.quats.push(scene.quats[i]);
-            out.opacity_logits.push(scene.opacity_logits[i]);
-            out.sh.extend_from_slice(&scene.sh[i * k * 3..(i + 1) * k * 3]);
+            out.push(mean, log_scale, scene.quats[i], scene.opacity_logits[i], &scene.sh[i * k * 3..(i + 1) * k * 3]);
             keep.push(if carried { Some(i) } else { None });
         };
         let mut grown = n;
