@@ -445,3 +445,75 @@ fn real_lpips_network_scores_a_blurred_photo() {
     assert_eq!((r.x0, r.x1, r.y0, r.y1), (96, 128, 64, 96));
     assert!(lpips.masked(&blurred, &planar, &dot, w, h).unwrap().unwrap() > 0.0);
 }
+
+/// The floater score's true surface is the scene after the removal: where the synth wrote the
+/// configuration without the removed objects only (`--gt-without`), a Gaussian on a kept object
+/// that stands behind a removed one is on the surface, not a floater; measured against the empty
+/// room it would be one.
+#[test]
+fn a_kept_object_behind_a_removed_one_is_not_a_floater() {
+    let exe = env!("CARGO_BIN_EXE_cogeo");
+    let root = std::env::temp_dir().join(format!("cogeo_eval_kept_{}", std::process::id()));
+    let path = |p: &str| root.join(p).to_string_lossy().into_owned();
+    let data = path("data");
+    let (w, h) = (64u32, 48u32);
+    run_cogeo(
+        exe,
+        &[
+            "synth",
+            "--out",
+            &data,
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--views",
+            "12",
+            "--objects",
+            "3",
+            "--seed",
+            "5",
+            "--gt-without",
+            "1",
+        ],
+    );
+    let ds = cogeo::train::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
+    let exr = |sub: &str, name: &str| {
+        cogeo::io::read_exr_channel(&root.join(format!("data/{sub}/{name}.exr")), None).unwrap().2
+    };
+    // a pixel of object 1's silhouette where a kept object is what the view sees once object 1 is
+    // gone (of 3 objects, seed 5 has views where one stands 10 % or more in front of the room)
+    let found = ds.train.iter().map(|v| &v.camera).find_map(|c| {
+        let mask = image::open(root.join(format!("data/object_mask/{}.png", c.name))).unwrap().to_luma8();
+        let (kept, room) = (exr("without_1/depth", &c.name), exr("depth_background", &c.name));
+        (0..(w * h) as usize)
+            .find(|&i| mask.as_raw()[i] == 1 && kept[i] > 0.0 && kept[i] < 0.9 * room[i])
+            .map(|i| (c.clone(), i, kept[i] as f64))
+    });
+    let (cam, i, z) = found.expect("a kept object stands behind object 1 in some view of this scene");
+    let (x, y) = ((i as u32 % w) as f64 + 0.5, (i as u32 / w) as f64 + 0.5);
+    let on_kept = cam.image_point(x, y, z).map(|v| v as f32);
+    let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
+    scene.push(on_kept, [-4.0; 3], [1.0, 0.0, 0.0, 0.0], 0.0, &[0.0; 3]);
+    let ply = root.join("kept.ply");
+    cogeo::scene::ply::write_ply(&scene, &ply).unwrap();
+    let gt = format!("{data}/without_1/images");
+    let out = path("kept.json");
+    let masks = format!("{data}/object_mask");
+    let args = ["eval", "--renders", &gt, "--gt", &gt, "--masks", &masks, "--labels", "1", "--data", &data];
+    run_cogeo(exe, &[&args[..], &["--scene", &ply.to_string_lossy(), "--out", &out]].concat());
+    let m: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(m["floaters"]["gaussians"].as_u64().unwrap(), 0, "{}", m["floaters"]);
+    // the same point against the empty room's depth, as the score measured it before
+    let cams: Vec<Camera> = ds.train.iter().chain(&ds.test).map(|v| v.camera.clone()).collect();
+    let room: Vec<Vec<f32>> = cams.iter().map(|c| exr("depth_background", &c.name)).collect();
+    let regions: Vec<Vec<bool>> = cams
+        .iter()
+        .map(|c| {
+            let mask = image::open(root.join(format!("data/object_mask/{}.png", c.name))).unwrap().to_luma8();
+            mask.as_raw().iter().map(|&l| l == 1).collect()
+        })
+        .collect();
+    assert_eq!(floater_score(&scene, &cams, &room, &regions, 0.05).1, 1);
+    std::fs::remove_dir_all(&root).ok();
+}

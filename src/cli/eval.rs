@@ -26,12 +26,14 @@ pub struct EvalArgs {
     /// (`unseen_mask/`), the leftover-object score (`images/`), and enables --depth and --scene.
     #[arg(long)]
     pub data: Option<PathBuf>,
-    /// Rendered depth (camera z) as `<name>.exr`: AbsRel and RMSE inside the mask against
-    /// `depth_background/` (needs --data).
+    /// Rendered depth (camera z) as `<name>.exr`: AbsRel and RMSE inside the mask against the true
+    /// depth without the removed objects (`without_<labels>/depth/` where the synth wrote it, else
+    /// `depth_background/`; needs --data).
     #[arg(long)]
     pub depth: Option<PathBuf>,
     /// The edited scene (PLY): floater score = opacity-weighted count of Gaussians farther than
-    /// --tau from the true surface in every view whose mask they project into (needs --data).
+    /// --tau from the true surface (the same true depth as --depth: kept objects are surface) in
+    /// every view whose mask they project into (needs --data).
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Floater threshold, relative to the true depth.

@@ -235,15 +235,16 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         (Some(_), Some(_)) => not_computed("no mask pixel with valid depth"),
         _ => not_computed("needs --data and --depth"),
     };
-    out["floaters"] = match (&cfg.data, &cfg.scene) {
-        (Some(data), Some(scene_path)) => {
+    out["floaters"] = match (&cfg.data, &truth, &cfg.scene) {
+        (Some(data), Some(truth), Some(scene_path)) => {
             let scene = crate::scene::ply::read_ply(scene_path)?;
             let ds = crate::train::dataset::load(data, "images", 1)?;
             let (mut cams, mut depths, mut regions) = (vec![], vec![], vec![]);
             for v in ds.train.iter().chain(&ds.test) {
                 let c = &v.camera;
-                let (_, _, d) =
-                    crate::io::read_exr_channel(&data.join(format!("depth_background/{}.exr", c.name)), None)?;
+                // the true surface after the removal: kept objects included where the synth wrote
+                // that configuration (a kept object behind a removed one is not a floater)
+                let (_, _, d) = crate::io::read_exr_channel(&truth.depth.join(format!("{}.exr", c.name)), None)?;
                 let mpath = find_image(&data.join("object_mask"), &c.name)
                     .ok_or_else(|| anyhow!("{}: no object mask for {}", data.join("object_mask").display(), c.name))?;
                 regions.push(load_mask(&mpath, &cfg.labels, c.width, c.height)?);
