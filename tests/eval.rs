@@ -292,12 +292,7 @@ fn eval_cli_on_a_synth_dataset() {
     let (_, _, depth) =
         cogeo::io::read_exr_channel(&root.join(format!("data/depth_background/{}.exr", cam.name)), None).unwrap();
     let z = depth[(y * 40 + x) as usize] as f64;
-    let world = |z: f64| {
-        let pc = [(x as f64 + 0.5 - cam.cx) / cam.fx * z, (y as f64 + 0.5 - cam.cy) / cam.fy * z, z];
-        let r = cam.rotation;
-        let d = [pc[0] - cam.translation[0], pc[1] - cam.translation[1], pc[2] - cam.translation[2]];
-        [0, 1, 2].map(|j| (r[0][j] * d[0] + r[1][j] * d[1] + r[2][j] * d[2]) as f32)
-    };
+    let world = |z: f64| cam.pixel_point(x as usize, y as usize, z).map(|v| v as f32);
     let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
     for (p, logit) in [(world(z), 1.0f32), (world(0.5 * z), 1.0)] {
         scene.push(p, [-4.0; 3], [1.0, 0.0, 0.0, 0.0], logit, &[0.0; 3]);
@@ -453,7 +448,7 @@ fn real_lpips_network_scores_a_blurred_photo() {
 #[test]
 fn a_kept_object_behind_a_removed_one_is_not_a_floater() {
     let exe = env!("CARGO_BIN_EXE_cogeo");
-    let root = std::env::temp_dir().join(format!("cogeo_eval_kept_{}", std::process::id()));
+    let root = common::scratch_dir("eval-kept-object");
     let path = |p: &str| root.join(p).to_string_lossy().into_owned();
     let data = path("data");
     let (w, h) = (64u32, 48u32);
@@ -491,8 +486,7 @@ fn a_kept_object_behind_a_removed_one_is_not_a_floater() {
             .map(|i| (c.clone(), i, kept[i] as f64))
     });
     let (cam, i, z) = found.expect("a kept object stands behind object 1 in some view of this scene");
-    let (x, y) = ((i as u32 % w) as f64 + 0.5, (i as u32 / w) as f64 + 0.5);
-    let on_kept = cam.image_point(x, y, z).map(|v| v as f32);
+    let on_kept = cam.pixel_point(i % w as usize, i / w as usize, z).map(|v| v as f32);
     let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
     scene.push(on_kept, [-4.0; 3], [1.0, 0.0, 0.0, 0.0], 0.0, &[0.0; 3]);
     let ply = root.join("kept.ply");
