@@ -180,6 +180,38 @@ pub fn distance_to(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
     d
 }
 
+/// The 8-connected components of the set pixels of `mask`, each as its pixel indices in scan
+/// order of discovery; components in the order of their first pixel.
+pub fn components(mask: &[bool], w: usize, h: usize) -> Vec<Vec<usize>> {
+    let mut seen = vec![false; w * h];
+    let mut out = Vec::new();
+    for start in 0..w * h {
+        if !mask[start] || seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        let mut comp = vec![start];
+        let mut next = 0;
+        while next < comp.len() {
+            let (x, y) = ((comp[next] % w) as isize, (comp[next] / w) as isize);
+            next += 1;
+            for (dx, dy) in [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)] {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                    continue;
+                }
+                let j = ny as usize * w + nx as usize;
+                if mask[j] && !seen[j] {
+                    seen[j] = true;
+                    comp.push(j);
+                }
+            }
+        }
+        out.push(comp);
+    }
+    out
+}
+
 /// Grows a mask by `radius` pixels (a disc).
 pub fn dilate(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<bool> {
     if radius <= 0.0 {
@@ -275,5 +307,20 @@ mod tests {
         let ramp: Vec<f32> = (0..10 * 8).map(|i| i as f32).collect();
         let rect = Rect { x0: 2, y0: 1, x1: 5, y1: 3 };
         assert_eq!(crop(&ramp, 10, 8, 1, rect), vec![12.0, 13.0, 14.0, 22.0, 23.0, 24.0]);
+    }
+
+    #[test]
+    fn components_join_diagonal_neighbours_and_keep_apart_the_rest() {
+        // 6 x 4:  X . . . . X
+        //         . X . . . X
+        //         . . . . . .
+        //         . . . X . .
+        let (w, h) = (6, 4);
+        let set = [0, 5, 7, 11, 21];
+        let mask: Vec<bool> = (0..w * h).map(|i| set.contains(&i)).collect();
+        let mut parts = components(&mask, w, h);
+        parts.iter_mut().for_each(|p| p.sort());
+        assert_eq!(parts, vec![vec![0, 7], vec![5, 11], vec![21]]);
+        assert!(components(&vec![false; w * h], w, h).is_empty());
     }
 }

@@ -22,8 +22,8 @@
 //! Either model may name its single input and output as it likes.
 
 use super::harmonic::harmonic_fill;
-use super::surfaces::{flanking, surfaces_around};
-use crate::image_ops::{feather, resize_bilinear};
+use super::surfaces::{flanking_at, surfaces_around};
+use crate::image_ops::{components, feather, resize_bilinear};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
 use std::path::Path;
@@ -136,17 +136,25 @@ impl DepthPrior {
                 let disparity: Vec<f32> =
                     (0..w * h).map(|i| if known[i] { 1.0 / v.render_depth[i] } else { 0.0 }).collect();
                 let mut filled = harmonic_fill(&disparity, &known, w, h, 1);
-                // the planes around the unknown part continue into it between their own pixels
+                // the planes around each unknown part continue into it between their own pixels
                 // (`flanking`), meeting at creases; the harmonic interpolant stays where no plane
                 // is plausible
-                let unknown: Vec<bool> = known.iter().map(|&k| !k).collect();
-                let surfaces = surfaces_around(&disparity, &known, &unknown, w, h, PLANE_SEED);
                 let known_depth: Vec<f32> =
                     (0..w * h).map(|i| if known[i] { v.render_depth[i] } else { 0.0 }).collect();
-                let flanks = flanking(&surfaces.flank_labels(&known_depth, w), &unknown, w, h);
-                for i in (0..w * h).filter(|&i| unknown[i]) {
-                    if let Some((_, d)) = surfaces.visible_among(i, w, flanks[i]) {
-                        filled[i] = d as f32;
+                let unknown: Vec<bool> = known.iter().map(|&k| !k).collect();
+                let surfaces = surfaces_around(&disparity, &known, &unknown, w, h, PLANE_SEED);
+                for part in components(&unknown, w, h) {
+                    // each part of the hole takes the planes refitted to their pixels around it:
+                    // a curved surface (a cylindrical wall) fits one plane only near where it
+                    // was fitted (`Surfaces::refit_near`)
+                    let mut region = vec![false; w * h];
+                    part.iter().for_each(|&i| region[i] = true);
+                    let near = surfaces.refit_near(&disparity, &known, &region, w, h);
+                    let flanks = flanking_at(&near.flank_labels(&known_depth, w), &unknown, &part, w, h);
+                    for (&i, &flank) in part.iter().zip(&flanks) {
+                        if let Some((_, d)) = near.visible_among(i, w, flank) {
+                            filled[i] = d as f32;
+                        }
                     }
                 }
                 Ok((filled, PriorSpace::Disparity))

@@ -44,6 +44,7 @@ pub const PLANE_TOLERANCE: f64 = 0.03;
 pub const LABEL_TOLERANCE: f64 = 0.1;
 const RANSAC_TRIALS: usize = 256;
 const MAX_PLANES: usize = 3;
+const MIN_REFIT_PIXELS: usize = 12;
 
 /// Solves the 3x3 system m z = r (Gaussian elimination with partial pivoting); None if singular.
 fn solve3(mut m: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
@@ -285,6 +286,45 @@ impl Surfaces {
         labels
     }
 
+    /// These surfaces, each plane refitted to its own pixels in the band around `region` (one
+    /// part of a hole): those within LABEL_TOLERANCE of it that fit it best, then three Tukey
+    /// reweightings (scale PLANE_TOLERANCE). A plane keeps its fit where fewer than
+    /// MIN_REFIT_PIXELS of its pixels are in that band.
+    pub fn refit_near(&self, disp: &[f32], known: &[bool], region: &[bool], w: usize, h: usize) -> Surfaces {
+        let radius = band_radius(region.iter().filter(|&&r| r).count());
+        let dist = distance_to(region, w, h);
+        let band: Vec<usize> =
+            (0..w * h).filter(|&i| known[i] && !region[i] && dist[i] <= radius && disp[i] > 0.0).collect();
+        let mut out = self.clone();
+        for (s, plane) in out.planes.iter_mut().enumerate() {
+            let own: Vec<usize> = band
+                .iter()
+                .copied()
+                .filter(|&i| self.member_within(i, w, disp[i] as f64, LABEL_TOLERANCE) == Some(s))
+                .collect();
+            if own.len() < MIN_REFIT_PIXELS {
+                continue;
+            }
+            let mut fit = *plane;
+            for _ in 0..3 {
+                let tukey = |i: usize| {
+                    let r = fit.residual(i, w, disp[i] as f64) / PLANE_TOLERANCE;
+                    if r < 1.0 {
+                        (1.0 - r * r).powi(2)
+                    } else {
+                        0.0
+                    }
+                };
+                match least_squares(&own, disp, w, tukey) {
+                    Some(p) => fit = p,
+                    None => break,
+                }
+            }
+            *plane = fit;
+        }
+        out
+    }
+
     /// As `labels`, within FLANK_TOLERANCE: which plane a pixel supports as a flank of a hole.
     pub fn flank_labels(&self, depth: &[f32], w: usize) -> Vec<u8> {
         self.labels_within(depth, w, FLANK_TOLERANCE)
@@ -318,7 +358,16 @@ const FLANK_TOLERANCE: f64 = 0.2;
 /// a hole between its own pixels, not past them: the side of a statue's pedestal, seen only below
 /// the hole, must not cover the lawn above it.
 pub fn flanking(labels: &[u8], unknown: &[bool], w: usize, h: usize) -> Vec<u32> {
+    let pixels: Vec<usize> = (0..w * h).filter(|&i| unknown[i]).collect();
     let mut out = vec![0u32; w * h];
+    for (&i, bits) in pixels.iter().zip(flanking_at(labels, unknown, &pixels, w, h)) {
+        out[i] = bits;
+    }
+    out
+}
+
+/// `flanking` of the unknown pixels `pixels` only, in their order.
+pub fn flanking_at(labels: &[u8], unknown: &[bool], pixels: &[usize], w: usize, h: usize) -> Vec<u32> {
     // the planes of the first FLANK_DEPTH known pixels from pixel (x, y) stepping (dx, dy)
     let side = |x: usize, y: usize, dx: isize, dy: isize| {
         let (mut x, mut y, mut seen, mut bits) = (x as isize, y as isize, 0, 0u32);
@@ -336,12 +385,19 @@ pub fn flanking(labels: &[u8], unknown: &[bool], w: usize, h: usize) -> Vec<u32>
             }
         }
     };
-    for i in (0..w * h).filter(|&i| unknown[i]) {
-        let (x, y) = (i % w, i / w);
-        let (l, r, u, d) = (side(x, y, -1, 0), side(x, y, 1, 0), side(x, y, 0, -1), side(x, y, 0, 1));
-        out[i] = (l & r) | (u & d) | ((l | r) & (u | d));
-    }
-    out
+    pixels
+        .iter()
+        .map(|&i| {
+            let (x, y) = (i % w, i / w);
+            let (l, r, u, d) = (side(x, y, -1, 0), side(x, y, 1, 0), side(x, y, 0, -1), side(x, y, 0, 1));
+            (l & r) | (u & d) | ((l | r) & (u | d))
+        })
+        .collect()
+}
+
+/// How far (pixels) from a hole of `holes` pixels the band of known pixels reaches.
+fn band_radius(holes: usize) -> f32 {
+    (0.3 * (holes as f32).sqrt()).clamp(4.0, 48.0)
 }
 
 /// Finds the surfaces around the `hole` from the disparity `disp` of the `known` pixels within a
@@ -353,7 +409,7 @@ pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h:
     if holes == 0 {
         return empty;
     }
-    let radius = (0.3 * (holes as f32).sqrt()).clamp(4.0, 48.0);
+    let radius = band_radius(holes);
     let dist = distance_to(hole, w, h);
     let band: Vec<bool> =
         (0..w * h).map(|i| known[i] && !hole[i] && dist[i] <= radius && disp[i] > 0.0 && disp[i].is_finite()).collect();
