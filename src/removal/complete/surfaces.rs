@@ -29,6 +29,17 @@ impl Plane {
         let (x, y) = center(i, w);
         (self.disparity(x, y) - d).abs() / d
     }
+
+    /// Tukey's biweight of pixel `i` with disparity `d` for a robust refit of this plane: the
+    /// relative residual on the scale of PLANE_TOLERANCE, 0 beyond it.
+    fn tukey_weight(&self, i: usize, w: usize, d: f64) -> f64 {
+        let r = self.residual(i, w, d) / PLANE_TOLERANCE;
+        if r < 1.0 {
+            (1.0 - r * r).powi(2)
+        } else {
+            0.0
+        }
+    }
 }
 
 fn center(i: usize, w: usize) -> (f64, f64) {
@@ -124,15 +135,7 @@ pub fn local_plane(disp: &[f32], w: usize, h: usize, x: usize, y: usize, radius:
     let near = |i: usize| (((disp[i] as f64 - center_disp).abs() / center_disp) < 0.1) as u8 as f64;
     let mut plane = least_squares(&idx, disp, w, near)?;
     for _ in 0..3 {
-        let tukey = |i: usize| {
-            let r = plane.residual(i, w, disp[i] as f64) / PLANE_TOLERANCE;
-            if r < 1.0 {
-                (1.0 - r * r).powi(2)
-            } else {
-                0.0
-            }
-        };
-        plane = least_squares(&idx, disp, w, tukey)?;
+        plane = least_squares(&idx, disp, w, |i| plane.tukey_weight(i, w, disp[i] as f64))?;
     }
     Some(plane)
 }
@@ -291,10 +294,8 @@ impl Surfaces {
     /// reweightings (scale PLANE_TOLERANCE). A plane keeps its fit where fewer than
     /// MIN_REFIT_PIXELS of its pixels are in that band.
     pub fn refit_near(&self, disp: &[f32], known: &[bool], region: &[bool], w: usize, h: usize) -> Surfaces {
-        let radius = band_radius(region.iter().filter(|&&r| r).count());
-        let dist = distance_to(region, w, h);
-        let band: Vec<usize> =
-            (0..w * h).filter(|&i| known[i] && !region[i] && dist[i] <= radius && disp[i] > 0.0).collect();
+        let in_band = band_around(disp, known, region, w, h);
+        let band: Vec<usize> = (0..w * h).filter(|&i| in_band[i]).collect();
         let mut out = self.clone();
         for (s, plane) in out.planes.iter_mut().enumerate() {
             let own: Vec<usize> = band
@@ -307,15 +308,7 @@ impl Surfaces {
             }
             let mut fit = *plane;
             for _ in 0..3 {
-                let tukey = |i: usize| {
-                    let r = fit.residual(i, w, disp[i] as f64) / PLANE_TOLERANCE;
-                    if r < 1.0 {
-                        (1.0 - r * r).powi(2)
-                    } else {
-                        0.0
-                    }
-                };
-                match least_squares(&own, disp, w, tukey) {
+                match least_squares(&own, disp, w, |i| fit.tukey_weight(i, w, disp[i] as f64)) {
                     Some(p) => fit = p,
                     None => break,
                 }
@@ -395,9 +388,13 @@ pub fn flanking_at(labels: &[u8], unknown: &[bool], pixels: &[usize], w: usize, 
         .collect()
 }
 
-/// How far (pixels) from a hole of `holes` pixels the band of known pixels reaches.
-fn band_radius(holes: usize) -> f32 {
-    (0.3 * (holes as f32).sqrt()).clamp(4.0, 48.0)
+/// The band around `hole` whose surfaces continue into it: the known pixels with a finite
+/// positive disparity within 0.3 sqrt(hole pixels) of it (4 to 48 pixels).
+fn band_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let holes = hole.iter().filter(|&&m| m).count();
+    let radius = (0.3 * (holes as f32).sqrt()).clamp(4.0, 48.0);
+    let dist = distance_to(hole, w, h);
+    (0..w * h).map(|i| known[i] && !hole[i] && dist[i] <= radius && disp[i] > 0.0 && disp[i].is_finite()).collect()
 }
 
 /// Finds the surfaces around the `hole` from the disparity `disp` of the `known` pixels within a
@@ -409,10 +406,7 @@ pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h:
     if holes == 0 {
         return empty;
     }
-    let radius = band_radius(holes);
-    let dist = distance_to(hole, w, h);
-    let band: Vec<bool> =
-        (0..w * h).map(|i| known[i] && !hole[i] && dist[i] <= radius && disp[i] > 0.0 && disp[i].is_finite()).collect();
+    let band = band_around(disp, known, hole, w, h);
     let in_band: Vec<usize> = (0..w * h).filter(|&i| band[i]).collect();
     if in_band.len() < 12 {
         return empty;
