@@ -10,7 +10,7 @@
 //!
 //! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
 //! removal only, cogeo, ground truth on one held-out view), and replaces the table between the
-//! `removal-table` markers of README.md (unless --no-readme). `--supersample N` makes the scenes with
+//! `removal-table` markers of bench/RESULTS.md (unless --no-readme). `--supersample N` makes the scenes with
 //! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
 //! pipeline a second time on the same trained scene, which shows the run-to-run spread (float
 //! atomics in the GPU passes) that any difference between variants must exceed. `--retrain N`
@@ -20,6 +20,7 @@
 #[path = "common.rs"]
 mod common;
 
+use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use common::{cogeo, read_json, s};
 
 use serde_json::{json, Value};
@@ -78,76 +79,35 @@ impl Training<'_> {
     fn variants(&self, dir: &Path, seed: u64, variants: &[(&str, &str, &[&str])]) -> Vec<Value> {
         let p = |x: &Path| x.to_string_lossy().into_owned();
         let (spec, data) = (self.spec, self.data);
-        let train = dir.join("train");
-        cogeo(&s(&[
-            "train",
-            "--data",
-            &p(data),
-            "--out",
-            &p(&train),
-            "--iters",
-            self.iters,
-            "--sh-degree",
-            "1",
-            "--no-densify",
-            "--checkpoint-every",
-            "0",
-            "--seed",
-            &seed.to_string(),
-        ]));
-        let train_metrics = read_json(&train.join("metrics.json"));
+        let layout = Layout { out: dir };
+        let capture = Capture::at(data);
+        let mut train_args = pipeline::train(&capture, &layout.train());
+        train_args.extend(pipeline::synth_training(self.iters.parse().expect("--iters is a number"), seed));
+        cogeo(&train_args);
+        let train_metrics = read_json(&layout.train().join("metrics.json"));
         let mut methods: Vec<&str> = variants.iter().map(|v| v.1).collect();
         methods.sort();
         methods.dedup();
         for method in methods {
-            cogeo(&s(&[
-                "tag",
-                "--scene",
-                &p(&train.join("scene.ply")),
-                "--data",
-                &p(data),
-                "--masks",
-                "object_mask",
-                "--method",
-                method,
-                "--out",
-                &p(&dir.join(format!("tagged_{method}.ply"))),
-            ]));
+            let tagged = dir.join(format!("tagged_{method}.ply"));
+            cogeo(&pipeline::tag(
+                &layout.trained_scene(),
+                &capture,
+                Objects::Masks("object_mask"),
+                Some(method),
+                &tagged,
+            ));
         }
         let mut rows = Vec::new();
         for (k, (variant, method, extra)) in variants.iter().enumerate() {
             let out = dir.join(format!("variant_{k}"));
-            let mut a = s(&[
-                "remove",
-                "--scene",
-                &p(&dir.join(format!("tagged_{method}.ply"))),
-                "--data",
-                &p(data),
-                "--labels",
-                spec.labels,
-                "--out",
-                &p(&out),
-            ]);
+            let tagged = dir.join(format!("tagged_{method}.ply"));
+            let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(spec.labels), &out);
             a.extend(s(extra));
             cogeo(&a);
             let metrics_path = out.join("metrics.json");
-            let mut e = s(&[
-                "eval",
-                "--renders",
-                &p(&out.join("test_after")),
-                "--gt",
-                &p(self.truth),
-                "--masks",
-                &p(&data.join("object_mask")),
-                "--labels",
-                spec.labels,
-                "--data",
-                &p(data),
-                "--scene",
-                &p(&out.join("scene.ply")),
-                "--out",
-                &p(&metrics_path),
-            ]);
+            let mut e = pipeline::eval(&out, self.truth, &data.join("object_mask"), &metrics_path);
+            e.extend(s(&["--labels", spec.labels, "--data", &p(data), "--scene", &p(&out.join("scene.ply"))]));
             if let Some(m) = self.lpips {
                 e.extend(s(&["--lpips-model", m]));
             }
@@ -400,12 +360,12 @@ fn main() {
         strip.save(&path).unwrap();
         println!("wrote {}", path.display());
         image_line = format!(
-            "\n![input, removal only, cogeo, ground truth](bench/results/{name})\n\n\
+            "\n![input, removal only, cogeo, ground truth](results/{name})\n\n\
              Held-out view {first} of the {scene} scene: input, removal only, cogeo, ground truth.\n"
         );
     }
     if !args.iter().any(|a| a == "--no-readme") {
-        let readme_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("README.md");
+        let readme_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench/RESULTS.md");
         let readme = std::fs::read_to_string(&readme_path).unwrap();
         let (begin, end) = ("<!-- removal-table:begin -->", "<!-- removal-table:end -->");
         if let (Some(b), Some(e)) = (readme.find(begin), readme.find(end)) {
@@ -417,7 +377,7 @@ fn main() {
             .unwrap();
             println!("updated the removal table in {}", readme_path.display());
         } else {
-            println!("README.md has no removal-table markers; left as is");
+            println!("bench/RESULTS.md has no removal-table markers; left as is");
         }
     }
     std::fs::remove_dir_all(&root).ok();

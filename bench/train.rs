@@ -18,8 +18,8 @@
 mod common;
 
 use cogeo::rng::Rng;
+use cogeo::scene::dataset::{Dataset, View};
 use cogeo::scene::{Camera, GaussianScene};
-use cogeo::train::dataset::{Dataset, View};
 use cogeo::train::trainer::{TrainConfig, Trainer};
 use std::time::Instant;
 
@@ -34,7 +34,7 @@ fn main() {
     let trained = common::arg(&args, "--scene").map(|ply| {
         let data = common::arg(&args, "--data").expect("--scene needs --data (the scene's dataset)");
         let scene = cogeo::scene::ply::read_ply(std::path::Path::new(&ply)).expect("cannot read --scene");
-        let data = cogeo::train::dataset::load(std::path::Path::new(&data), "images", 1).expect("cannot load --data");
+        let data = cogeo::scene::dataset::load(std::path::Path::new(&data), "images", 1).expect("cannot load --data");
         (scene, data)
     });
     let full_sh = trained.is_some() || args.iter().any(|a| a == "--full-sh");

@@ -91,13 +91,17 @@ pub fn write_atomic(path: &Path, body: impl FnOnce(&mut BufWriter<std::fs::File>
     result.with_context(|| format!("writing {}", path.display()))
 }
 
+/// The largest image width or height cogeo accepts (pixel counts stay below 2^30, so pixel indices
+/// fit u32 arithmetic everywhere).
+pub const MAX_IMAGE_SIDE: u32 = 32768;
+
 /// Decodes an image file's bytes (PNG or JPEG, found from the content), refusing sizes beyond
 /// `MAX_IMAGE_SIDE` per side, before any pixel memory is taken. The decoder may allocate at most
 /// 2048 bytes per byte of file (+16 MiB): deflate cannot compress more than about 1032:1, so a
 /// real image always fits, while a 200-byte file whose header claims 30000 x 30000 pixels is
 /// refused instead of taking a gigabyte. `what` names the file in errors.
 pub fn decode_image(data: &[u8], what: &str) -> Result<image::DynamicImage> {
-    let side = crate::scene::camera::MAX_IMAGE_SIDE;
+    let side = MAX_IMAGE_SIDE;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(side);
     limits.max_image_height = Some(side);

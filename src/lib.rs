@@ -12,12 +12,14 @@
 // Per-channel and per-row index loops read as the formulas they implement (c[ch] += w * color[ch]).
 #![allow(clippy::needless_range_loop)]
 
+pub mod config;
 pub mod eval;
 pub mod flag_values;
 pub mod gpu;
 pub mod image_ops;
 pub mod io;
 pub mod onnx;
+pub mod pipeline;
 pub mod removal;
 pub mod render;
 pub mod rng;

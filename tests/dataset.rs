@@ -3,8 +3,8 @@
 //! taken directly at the lower resolution with N x N rays per pixel (`cogeo synth --supersample N`),
 //! which is what an area-integrating camera of that resolution records.
 
+use cogeo::scene::dataset::{box_downscale, load};
 use cogeo::synth::{generate, SynthConfig};
-use cogeo::train::dataset::{box_downscale, load};
 
 fn value(c: usize, x: usize, y: usize) -> f32 {
     // no two blocks alike, nothing a wrong block offset could still match

@@ -280,7 +280,7 @@ fn eval_cli_on_a_synth_dataset() {
     assert!(fid_got > 0.0);
 
     // floaters: a Gaussian on the true background behind object 1 and one in front of it
-    let ds = cogeo::train::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
+    let ds = cogeo::scene::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
     let cam = ds.train.iter().map(|v| &v.camera).find(|c| {
         let mask = image::open(format!("{masks}/{}.png", c.name)).unwrap().to_luma8();
         mask.pixels().any(|p| p[0] == 1)
@@ -472,7 +472,7 @@ fn a_kept_object_behind_a_removed_one_is_not_a_floater() {
             "1",
         ],
     );
-    let ds = cogeo::train::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
+    let ds = cogeo::scene::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
     let exr = |sub: &str, name: &str| {
         cogeo::io::read_exr_channel(&root.join(format!("data/{sub}/{name}.exr")), None).unwrap().2
     };

@@ -115,7 +115,7 @@ fn tag_with_prompts_end_to_end() {
         ],
     );
     // the written prompt masks are what the models give on each training image
-    let ds = cogeo::train::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
+    let ds = cogeo::scene::dataset::load(std::path::Path::new(&data), "images", 1).unwrap();
     let mut ps = PromptSegmenter::load(
         std::path::Path::new(&*det),
         std::path::Path::new(&*seg),

@@ -310,7 +310,8 @@ fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
 /// source's image, in its hole, or at a depth 10 % off, nothing is transferred.
 #[test]
 fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
-    use cogeo::removal::complete::transfer::{transfer, SourceView};
+    use cogeo::removal::complete::source_views::SourceView;
+    use cogeo::removal::complete::transfer::transfer;
     use cogeo::scene::Camera;
     let (w, h) = (40usize, 30usize);
     let cam = |name: &str, x: f64| {
@@ -391,7 +392,7 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
 #[test]
 fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     use cogeo::removal::complete::photo_depth::correct_hole_depth;
-    use cogeo::removal::complete::transfer::SourceView;
+    use cogeo::removal::complete::source_views::SourceView;
     use cogeo::scene::Camera;
     // a textured wall at z = 5 seen by a target and three sources 1.5 to the side, above, below
     let (w, h) = (96usize, 72usize);

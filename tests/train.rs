@@ -116,11 +116,11 @@ fn one_view_scene(
     count: usize,
     sh_degree: u32,
     quat: [f32; 4],
-) -> (cogeo::gpu::Gpu, cogeo::scene::GaussianScene, cogeo::train::dataset::Dataset) {
+) -> (cogeo::gpu::Gpu, cogeo::scene::GaussianScene, cogeo::scene::dataset::Dataset) {
     use cogeo::gpu::{DeviceChoice, Gpu};
     use cogeo::rng::Rng;
+    use cogeo::scene::dataset::{Dataset, View};
     use cogeo::scene::{Camera, GaussianScene};
-    use cogeo::train::dataset::{Dataset, View};
     let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
     let gpu = Gpu::new(&DeviceChoice { selector: None, validate, memory_limit_mib: None }).unwrap();
     let mut rng = Rng::new(seed);
@@ -216,8 +216,8 @@ fn frozen_groups_stay_put_and_trust_region_bounds_each_gaussian() {
 fn fused_step_matches_the_passes_apart() {
     use cogeo::gpu::{DeviceChoice, Gpu};
     use cogeo::rng::Rng;
+    use cogeo::scene::dataset::{Dataset, View};
     use cogeo::scene::{Camera, GaussianScene};
-    use cogeo::train::dataset::{Dataset, View};
     use cogeo::train::trainer::{Frozen, Strategy, TrainConfig, Trainer};
     let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
     let gpu = Gpu::new(&DeviceChoice { selector: None, validate, memory_limit_mib: None }).unwrap();

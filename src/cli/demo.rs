@@ -7,6 +7,7 @@ use super::args::DeviceArgs;
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use cogeo::image_ops::hstack_rgb8;
+use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -44,7 +45,7 @@ pub const DEMO_MARKER: &str = ".cogeo-demo";
 /// dispatch, passed in by the caller).
 pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result<()> {
     use cogeo::eval::folder::{evaluate, EvalConfig, Protocol};
-    use cogeo::train::dataset::{find_image, load_rgb};
+    use cogeo::scene::dataset::{find_image, load_rgb};
     let start = std::time::Instant::now();
     let out = &a.out;
     if out.exists() {
@@ -64,8 +65,7 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
     // points per view (31.5k Gaussians; the synth default of one per 12 pixels would give 86k, and
     // every pass but the blends scales with them) and new Gaussians from every second hole pixel in
     // x and y (stride 2: 8k instead of 36k, which made refinement twice as slow for -0.05 dB).
-    let (width, height, views, objects, iters, densify) =
-        if a.quick { (64, 48, 16, 3, 500, false) } else { (256, 192, 24, 4, 500, false) };
+    let (width, height, views, objects, iters) = if a.quick { (64, 48, 16, 3, 500) } else { (256, 192, 24, 4, 500) };
     let (points_per_view, stride) = if a.quick { (width * height / 12, 1) } else { (1500, 2) };
     if a.labels.is_empty() || a.labels.iter().any(|&l| l == 0 || l as usize > objects) {
         bail!("--labels must name objects 1..={objects} of the demo scene");
@@ -77,14 +77,12 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
         device = vec!["--device".to_string(), d.clone()];
     }
     let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<String>>();
-    let mut train = s(&["train", "--data", &p("data"), "--out", &p("train"), "--iters", &iters.to_string()]);
-    train.extend(s(&["--sh-degree", "1", "--checkpoint-every", "0", "--seed", &a.seed.to_string()]));
-    if !densify {
-        train.push("--no-densify".into());
-    }
+    let (data, layout) = (out.join("data"), Layout { out });
+    let capture = Capture::at(&data);
+    let mut train = pipeline::train(&capture, &layout.train());
+    train.extend(pipeline::synth_training(iters, a.seed));
     let remove = |dir: &str, extra: &[&str]| {
-        let mut v =
-            s(&["remove", "--scene", &p("tagged.ply"), "--data", &p("data"), "--labels", &labels, "--out", &p(dir)]);
+        let mut v = pipeline::remove(&layout.tagged(), &capture, Chosen::Labels(&labels), &out.join(dir));
         v.extend(s(&["--stride", &stride.to_string()]));
         v.extend(s(extra));
         v
@@ -120,19 +118,13 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
         ("train", train),
         (
             "tag",
-            s(&[
-                "tag",
-                "--scene",
-                &p("train/scene.ply"),
-                "--data",
-                &p("data"),
-                "--masks",
-                "object_mask",
-                "--method",
-                "vote",
-                "--out",
-                &p("tagged.ply"),
-            ]),
+            pipeline::tag(
+                &layout.trained_scene(),
+                &capture,
+                Objects::Masks("object_mask"),
+                Some("vote"),
+                &layout.tagged(),
+            ),
         ),
         ("remove", remove("removal", &[])),
         ("removal-only baseline", remove("removal_only", &["--removal-only"])),
@@ -149,7 +141,6 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
     }
     eprintln!("== 6/6 evaluate against the exact object-free ground truth");
     let t = std::time::Instant::now();
-    let data = out.join("data");
     let truth = cogeo::synth::ground_truth(&data, &a.labels);
     let eval = |dir: &str| {
         evaluate(&EvalConfig {

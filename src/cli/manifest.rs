@@ -1,9 +1,10 @@
-//! The `cogeo batch` manifest: a JSON file listing scenes (schema in the README, "Processing many
+//! The `cogeo batch` manifest: a JSON file listing scenes (schema in docs/usage.md, "Processing many
 //! scenes"). Paths in it are relative to the manifest's folder. Each entry becomes the command
 //! lines of its steps; per-entry options override the manifest's defaults flag by flag.
 
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Parser;
+use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -104,7 +105,7 @@ impl Manifest {
     pub fn load(path: &Path) -> Result<Manifest> {
         let text = std::fs::read(path).with_context(|| format!("{}: cannot read the manifest", path.display()))?;
         let file: ManifestFile = serde_json::from_slice(&text)
-            .with_context(|| format!("{}: not a cogeo batch manifest (see the README)", path.display()))?;
+            .with_context(|| format!("{}: not a cogeo batch manifest (see docs/usage.md)", path.display()))?;
         if file.scenes.is_empty() {
             bail!("{}: no scenes", path.display());
         }
@@ -195,55 +196,44 @@ impl Entry {
     /// The `cogeo` command line of one step.
     pub fn command_line(&self, m: &Manifest, step: Step) -> Result<Vec<String>> {
         let out = self.out_dir(m);
-        let p = |x: &Path| x.to_string_lossy().into_owned();
-        let data = p(&self.data);
-        let capture = [
-            "--data".to_string(),
-            data.clone(),
-            "--images".into(),
-            self.images.clone(),
-            "--downscale".into(),
-            self.downscale.to_string(),
-        ];
+        let layout = Layout { out: &out };
+        let capture = Capture { data: &self.data, images: Some(&self.images), downscale: Some(self.downscale) };
         let labels = self.labels.as_ref().map(|l| l.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(","));
-        let mut base: Vec<String> = vec![step.name().into()];
-        match step {
+        let base: Vec<String> = match step {
             Step::Train => {
-                base.extend(capture);
-                base.extend(["--out".into(), p(&out.join("train")), "--resume".into()]);
+                let mut v = pipeline::train(&capture, &layout.train());
+                v.push("--resume".into());
+                v
             }
             Step::Tag => {
-                base.extend(["--scene".into(), p(&out.join("train/scene.ply"))]);
-                base.extend(capture);
-                match (&self.masks, &self.prompts) {
-                    (Some(masks), None) => base.extend(["--masks".into(), masks.clone()]),
-                    (None, Some(prompts)) => base.extend(["--prompt".into(), prompts.join(",")]),
+                let objects = match (&self.masks, &self.prompts) {
+                    (Some(masks), None) => Objects::Masks(masks),
+                    (None, Some(prompts)) => Objects::Prompts(prompts),
                     _ => bail!("give exactly one of \"masks\" and \"prompts\""),
-                }
-                base.extend(["--out".into(), p(&out.join("tagged.ply"))]);
+                };
+                pipeline::tag(&layout.trained_scene(), &capture, objects, None, &layout.tagged())
             }
             Step::Remove => {
-                base.extend(["--scene".into(), p(&out.join("tagged.ply"))]);
-                base.extend(capture);
-                match (&labels, &self.remove_names) {
-                    (Some(l), None) => base.extend(["--labels".into(), l.clone()]),
-                    (None, Some(names)) => base.extend(["--prompt".into(), names.join(",")]),
+                let chosen = match (&labels, &self.remove_names) {
+                    (Some(l), None) => Chosen::Labels(l),
+                    (None, Some(names)) => Chosen::Names(names),
                     _ => bail!("give exactly one of \"labels\" and \"remove_names\""),
-                }
-                base.extend(["--out".into(), p(&out.join("removal"))]);
+                };
+                pipeline::remove(&layout.tagged(), &capture, chosen, &layout.removal())
             }
             Step::Eval => {
                 let gt = self.ground_truth.as_ref().ok_or_else(|| anyhow!("no ground_truth"))?;
-                base.extend(["--renders".into(), p(&out.join("removal/test_after")), "--gt".into(), p(&gt.images)]);
-                base.extend(["--masks".into(), p(&gt.masks), "--out".into(), p(&out.join("eval.json"))]);
+                let mut v = pipeline::eval(&layout.removal(), &gt.images, &gt.masks, &out.join("eval.json"));
                 if let Some(l) = &labels {
-                    base.extend(["--labels".into(), l.clone()]);
+                    v.extend(["--labels".into(), l.clone()]);
                 }
                 if gt.synth {
-                    base.extend(["--data".into(), data]);
+                    v.extend(["--data".into(), self.data.to_string_lossy().into_owned()]);
                 }
+                v
             }
-        }
+        };
+        debug_assert_eq!(base[0], step.name());
         let [defaults, own] = self.options(m, step);
         if let Some(flag) = defaults.iter().chain(own).find(|f| RESERVED.contains(&f.as_str())) {
             bail!("options.{}: {flag} is set by the batch itself", step.name());

@@ -81,3 +81,26 @@ pub fn dispatch(command: Command) -> Result<()> {
         Command::Batch(a) => batch::run(a, &run_command),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// Flags flattened in from the library's config structs must not share an id with another
+    /// flag of the same command: clap would merge them silently in a release build.
+    #[test]
+    fn every_subcommand_has_distinct_flag_ids_and_longs() {
+        let cli = super::Cli::command();
+        for sub in cli.get_subcommands() {
+            let mut ids: Vec<&str> = sub.get_arguments().map(|a| a.get_id().as_str()).collect();
+            let mut longs: Vec<&str> = sub.get_arguments().filter_map(|a| a.get_long()).collect();
+            for v in [&mut ids, &mut longs] {
+                let n = v.len();
+                v.sort();
+                v.dedup();
+                assert_eq!(v.len(), n, "`cogeo {}` has a flag id or name twice: {v:?}", sub.get_name());
+            }
+        }
+        cli.debug_assert();
+    }
+}

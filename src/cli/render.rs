@@ -134,7 +134,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         // the same pose check as training, against the full-size images where they are
         let image_dir = dir.join("images");
         if image_dir.is_dir() {
-            cogeo::train::dataset::repair_rotations(&mut model, dir, &image_dir)?;
+            cogeo::scene::dataset::repair_rotations(&mut model, dir, &image_dir)?;
         }
         for w in &model.warnings {
             eprintln!("warning: {w}");

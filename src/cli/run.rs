@@ -1,12 +1,13 @@
-//! `cogeo run`: train, tag and remove in one command.
+//! `cogeo run`: train, tag and remove in one command, the steps of `cogeo::pipeline`.
 
 use super::args::{DeviceArgs, ScaleArgs};
-use super::remove::{RemovalFlags, RemoveArgs};
-use super::tag::TagArgs;
-use super::train::TrainArgs;
-use super::{remove, tag, train};
-use anyhow::{Context, Result};
-use clap::Args;
+use super::remove::RemovalFlags;
+use super::{dispatch, Cli, Command};
+use anyhow::{anyhow, Context, Result};
+use clap::{Args, Parser};
+use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
+use cogeo::tag::{distill::DistillConfig, Method};
+use cogeo::train::trainer::TrainConfig;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -26,16 +27,16 @@ pub struct RunArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Training iterations.
-    #[arg(long, default_value_t = 30_000)]
+    #[arg(long, default_value_t = TrainConfig::default().iters)]
     pub iters: u32,
     /// Highest SH degree of training.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = TrainConfig::default().sh_degree)]
     pub sh_degree: u32,
     /// Tagging method.
-    #[arg(long, value_enum, default_value = "distill")]
-    pub tag_method: cogeo::tag::Method,
+    #[arg(long, value_enum, default_value_t)]
+    pub tag_method: Method,
     /// Distillation iterations.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = DistillConfig::default().iters)]
     pub tag_iters: u32,
     #[command(flatten)]
     pub removal: RemovalFlags,
@@ -45,56 +46,45 @@ pub struct RunArgs {
 
 pub fn run(a: RunArgs) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
-    let train_dir = a.out.join("train");
-    eprintln!("== 1/3 train");
-    train::run(TrainArgs {
-        data: a.data.clone(),
-        out: train_dir.clone(),
-        images: a.images.clone(),
-        scale: a.scale,
-        iters: a.iters,
-        resume: false,
-        checkpoint_every: 0,
-        sh_degree: a.sh_degree,
-        no_densify: false,
-        strategy: cogeo::train::trainer::Strategy::Adc,
-        max_gaussians: 3_000_000,
-        densify_until: None,
-        background: a.removal.background,
-        seed: a.removal.seed,
-        device: a.device.clone(),
-    })?;
-    eprintln!("== 2/3 tag");
-    let tagged = a.out.join("tagged.ply");
-    tag::run(TagArgs {
-        scene: train_dir.join("scene.ply"),
-        data: a.data.clone(),
-        images: a.images.clone(),
-        scale: a.scale,
-        masks: Some(a.masks.clone()),
-        prompt: Vec::new(),
-        detector: None,
-        segmenter: None,
-        prompt_embeddings: None,
-        box_threshold: 0.3,
-        method: a.tag_method,
-        out: tagged.clone(),
-        iters: a.tag_iters,
-        dim: 16,
-        lambda: 0.1,
-        knn: 5,
-        margin: 0.0,
-        seed: a.removal.seed,
-        device: a.device.clone(),
-    })?;
-    eprintln!("== 3/3 remove");
-    remove::run(RemoveArgs {
-        scene: tagged,
-        data: a.data,
-        images: a.images,
-        scale: a.scale,
-        out: a.out.join("removal"),
-        removal: a.removal,
-        device: a.device,
-    })
+    let layout = Layout { out: &a.out };
+    let capture = Capture { data: &a.data, images: Some(&a.images), downscale: Some(a.scale.downscale) };
+    let (seed, background) = (a.removal.options.seed.to_string(), a.removal.options.background);
+    let background = background.map(|c| c.to_string()).join(",");
+    let mut device = Vec::new();
+    if let Some(d) = &a.device.device {
+        device.extend(["--device".to_string(), d.clone()]);
+    }
+    if let Some(m) = a.device.max_device_memory {
+        device.extend(["--max-device-memory".to_string(), m.to_string()]);
+    }
+    let mut train = pipeline::train(&capture, &layout.train());
+    train.extend(["--iters".into(), a.iters.to_string(), "--sh-degree".into(), a.sh_degree.to_string()]);
+    train.extend(["--checkpoint-every".into(), "0".into(), "--seed".into(), seed.clone()]);
+    train.extend(["--background".into(), background]);
+    let masks = a.masks.to_string_lossy().into_owned();
+    let method = clap::ValueEnum::to_possible_value(&a.tag_method).expect("every method has a name");
+    let objects = Objects::Masks(&masks);
+    let mut tag = pipeline::tag(&layout.trained_scene(), &capture, objects, Some(method.get_name()), &layout.tagged());
+    tag.extend(["--iters".into(), a.tag_iters.to_string(), "--seed".into(), seed]);
+    // the removal's flags are already parsed: the step's own command line names the files, and
+    // the user's flags replace its defaults
+    let labels = a.removal.labels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(",");
+    let chosen = if a.removal.labels.is_empty() { Chosen::Names(&a.removal.prompt) } else { Chosen::Labels(&labels) };
+    let remove = pipeline::remove(&layout.tagged(), &capture, chosen, &layout.removal());
+    let steps = [("train", train), ("tag", tag), ("remove", remove)];
+    for (i, (name, mut args)) in steps.into_iter().enumerate() {
+        eprintln!("== {}/3 {name}", i + 1);
+        args.extend(device.iter().cloned());
+        let cli = Cli::try_parse_from(std::iter::once("cogeo".to_string()).chain(args.iter().cloned()))
+            .map_err(|e| anyhow!("internal command line {args:?}: {e}"))?;
+        let command = match cli.command {
+            Command::Remove(mut r) => {
+                r.removal = a.removal.clone();
+                Command::Remove(r)
+            }
+            other => other,
+        };
+        dispatch(command).with_context(|| format!("step {name}"))?;
+    }
+    Ok(())
 }

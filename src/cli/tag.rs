@@ -31,63 +31,32 @@ pub struct TagArgs {
     /// `<out>_prompt_masks/` for inspection and reuse as --masks.
     #[arg(long, value_delimiter = ',', conflicts_with = "masks")]
     pub prompt: Vec<String>,
-    /// Open-vocabulary detector (ONNX): inputs image [1,3,H,W] in [0,1] and text_embeds [Q,E];
-    /// outputs boxes [Q,K,4] (normalized x0,y0,x1,y1) and scores [Q,K].
-    #[arg(long)]
-    pub detector: Option<PathBuf>,
-    /// Box-prompted segmenter (ONNX, SAM-style): inputs image [1,3,H,W] in [0,1] and box [1,4]
-    /// (pixels x0,y0,x1,y1); output mask_logits [1,1,H,W] (> 0 = object).
-    #[arg(long)]
-    pub segmenter: Option<PathBuf>,
-    /// JSON object mapping each prompt to its text embedding (from the detector's text encoder).
-    #[arg(long)]
-    pub prompt_embeddings: Option<PathBuf>,
-    /// A prompt's best box is used when its detection score reaches this.
-    #[arg(long, default_value_t = 0.3)]
-    pub box_threshold: f32,
-    /// distill: identity features + classifier (cross-entropy + kNN KL); vote: closed-form blending
-    /// weight vote; project: label under each Gaussian's projected center (naive baseline).
-    #[arg(long, value_enum, default_value = "distill")]
-    pub method: cogeo::tag::Method,
+    #[command(flatten)]
+    pub prompt_models: cogeo::tag::prompt::PromptModels,
     /// Output tagged PLY (properties f_obj_* for distill, label, label_prob); the sidecar
     /// `<out>.json` holds the classifier and the report.
     #[arg(long)]
     pub out: PathBuf,
-    /// Distillation iterations (one training view each).
-    #[arg(long, default_value_t = 1000)]
-    pub iters: u32,
-    /// Identity feature dimension D (1..32).
-    #[arg(long, default_value_t = 16)]
-    pub dim: usize,
-    /// Weight lambda of the kNN KL spatial loss (0 disables it).
-    #[arg(long, default_value_t = 0.1)]
-    pub lambda: f32,
-    /// Neighbours k of the spatial loss.
-    #[arg(long, default_value_t = 5)]
-    pub knn: usize,
-    /// Vote: an object label needs a vote share at least this much above the background's.
-    #[arg(long, default_value_t = 0.0)]
-    pub margin: f32,
-    /// Random seed (feature and classifier initialization, view order, KL samples).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub options: cogeo::tag::TagOptions,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
 
 pub fn run(a: TagArgs) -> Result<()> {
-    use cogeo::tag::{self, distill::DistillConfig, labels, Method};
+    use cogeo::tag::{self, labels, Method};
     let scene = load_scene(&a.scene)?;
-    if a.dim == 0 || a.dim > tag::distill::MAX_DIM {
+    let opts = &a.options;
+    if opts.distill.dim == 0 || opts.distill.dim > tag::distill::MAX_DIM {
         bail!("--dim must be 1..={}", tag::distill::MAX_DIM);
     }
-    if a.method == Method::Distill && (a.iters == 0 || a.knn == 0) {
+    if opts.method == Method::Distill && (opts.distill.iters == 0 || opts.distill.knn == 0) {
         bail!("--iters and --knn must be positive");
     }
     if a.out.extension().and_then(|e| e.to_str()) != Some("ply") {
         bail!("{}: --out must name a .ply file", a.out.display());
     }
-    let data = cogeo::train::dataset::load(&a.data, &a.images, a.scale.downscale)?;
+    let data = cogeo::scene::dataset::load(&a.data, &a.images, a.scale.downscale)?;
     for w in &data.warnings {
         eprintln!("warning: {w}");
     }
@@ -100,13 +69,15 @@ pub fn run(a: TagArgs) -> Result<()> {
             (masks, maps)
         }
         None => {
-            let (Some(det), Some(seg), Some(emb)) = (&a.detector, &a.segmenter, &a.prompt_embeddings) else {
+            let (Some(det), Some(seg), Some(emb)) =
+                (&a.prompt_models.detector, &a.prompt_models.segmenter, &a.prompt_models.prompt_embeddings)
+            else {
                 bail!(
-                    "text prompts need ONNX models: --detector, --segmenter and --prompt-embeddings (contracts in the \
-                     README); without them, give per-view masks with --masks"
+                    "text prompts need ONNX models: --detector, --segmenter and --prompt-embeddings (contracts in \
+                     docs/usage.md); without them, give per-view masks with --masks"
                 );
             };
-            let mut seg = tag::prompt::PromptSegmenter::load(det, seg, emb, &a.prompt, a.box_threshold)?;
+            let mut seg = tag::prompt::PromptSegmenter::load(det, seg, emb, &a.prompt, a.prompt_models.box_threshold)?;
             let views: Vec<(&[f32], usize, usize)> = data
                 .train
                 .iter()
@@ -137,7 +108,7 @@ pub fn run(a: TagArgs) -> Result<()> {
                 eprintln!("prompt {p:?}: detected in {n} of {} views", views.len());
             }
             prompt_report = serde_json::json!({
-                "prompts": a.prompt, "detector": det, "segmenter": seg.segmenter_path(), "box_threshold": a.box_threshold,
+                "prompts": a.prompt, "detector": det, "segmenter": seg.segmenter_path(), "box_threshold": a.prompt_models.box_threshold,
                 "views_detected": hits, "masks_written_to": dir,
                 "detections": train_cams.iter().zip(&detections).map(|(c, d)| serde_json::json!({"view": c.name, "found": d})).collect::<Vec<_>>(),
             });
@@ -152,19 +123,7 @@ pub fn run(a: TagArgs) -> Result<()> {
         masks.display()
     );
     let gpu = open_gpu(&a.device)?;
-    let opts = tag::TagOptions {
-        method: a.method,
-        distill: DistillConfig {
-            dim: a.dim,
-            iters: a.iters,
-            lambda: a.lambda,
-            knn: a.knn,
-            seed: a.seed,
-            ..Default::default()
-        },
-        margin: a.margin,
-    };
-    let bar = ProgressBar::new(if a.method == Method::Distill { a.iters as u64 } else { 0 });
+    let bar = ProgressBar::new(if opts.method == Method::Distill { opts.distill.iters as u64 } else { 0 });
     bar.set_style(
         ProgressStyle::with_template("tag [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {msg}")
             .unwrap()
@@ -172,7 +131,7 @@ pub fn run(a: TagArgs) -> Result<()> {
     );
     let start = std::time::Instant::now();
     let cameras: Vec<Camera> = train_cams.iter().map(|c| (*c).clone()).collect();
-    let tagged = tag::tag_scene(&gpu, &scene, &cameras, &maps, &opts, |it, losses| {
+    let tagged = tag::tag_scene(&gpu, &scene, &cameras, &maps, opts, |it, losses| {
         bar.set_position(it as u64);
         if let Some((o, s)) = losses {
             bar.set_message(format!("L_obj {o:.4} L_space {s:.5}"));
@@ -195,7 +154,7 @@ pub fn run(a: TagArgs) -> Result<()> {
     let mut out_scene = scene.clone();
     tag::attach(&mut out_scene, &tagged.tags, tagged.features.as_ref().map(|(f, d)| (f.as_slice(), *d)));
     let report = serde_json::json!({
-        "method": a.method,
+        "method": opts.method,
         "scene": a.scene,
         "masks": masks,
         "labels": maps.num_objects,

@@ -1,6 +1,6 @@
 //! `cogeo train`: a Gaussian scene from a COLMAP capture, with checkpoints and resume.
 
-use super::args::{open_gpu, parse_rgb, DeviceArgs, ScaleArgs};
+use super::args::{open_gpu, DeviceArgs, ScaleArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use cogeo::scene::ply;
@@ -21,48 +21,29 @@ pub struct TrainArgs {
     pub images: String,
     #[command(flatten)]
     pub scale: ScaleArgs,
-    /// Training iterations.
-    #[arg(long, default_value_t = 30_000)]
-    pub iters: u32,
     /// Continue from the last checkpoint in --out (starts fresh when there is none).
     #[arg(long)]
     pub resume: bool,
     /// Write a checkpoint every this many iterations (0 = only at the end).
     #[arg(long, default_value_t = 1000)]
     pub checkpoint_every: u32,
-    /// Highest SH degree (one more band every 1000 iterations).
-    #[arg(long, default_value_t = 3)]
-    pub sh_degree: u32,
-    /// Disable densification (no clone / split / prune / opacity reset, no MCMC relocation).
-    #[arg(long)]
-    pub no_densify: bool,
-    /// Densification strategy: adc = INRIA adaptive density control (clone / split / prune, opacity
-    /// reset); mcmc = 3DGS-MCMC (relocate transparent Gaussians onto opaque ones, grow by 5 % every
-    /// 100 iterations up to --max-gaussians, opacity/scale regularizers and position noise).
-    #[arg(long, value_enum, default_value = "adc")]
-    pub strategy: cogeo::train::trainer::Strategy,
-    /// Gaussian budget: adc never grows past it; mcmc grows to it.
-    #[arg(long, default_value_t = 3_000_000)]
-    pub max_gaussians: usize,
-    /// Densify until this iteration (INRIA: 15000; scaled down automatically for short runs).
+    /// Densify until this iteration (INRIA: 15000; by default half the iterations for short runs).
     #[arg(long)]
     pub densify_until: Option<u32>,
-    /// Background color r,g,b in [0, 1] behind the Gaussians.
-    #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
-    pub background: [f32; 3],
-    /// Random seed (view order, splits).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub config: cogeo::train::trainer::TrainConfig,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
 
 pub fn run(a: TrainArgs) -> Result<()> {
-    use cogeo::train::{checkpoint, dataset, trainer};
-    if a.iters == 0 {
+    use cogeo::scene::dataset;
+    use cogeo::train::{checkpoint, trainer};
+    let iters = a.config.iters;
+    if iters == 0 {
         bail!("--iters must be positive");
     }
-    if a.sh_degree > cogeo::scene::MAX_SH_DEGREE {
+    if a.config.sh_degree > cogeo::scene::MAX_SH_DEGREE {
         bail!("--sh-degree must be 0..{}", cogeo::scene::MAX_SH_DEGREE);
     }
     let data = dataset::load(&a.data, &a.images, a.scale.downscale)?;
@@ -70,29 +51,18 @@ pub fn run(a: TrainArgs) -> Result<()> {
         eprintln!("warning: {w}");
     }
     let gpu = open_gpu(&a.device)?;
-    let densify_until = a.densify_until.unwrap_or_else(|| (a.iters / 2).min(15_000));
-    let cfg = trainer::TrainConfig {
-        iters: a.iters,
-        sh_degree: a.sh_degree,
-        densify: !a.no_densify,
-        densify_from: 500.min(a.iters / 10),
-        densify_until,
-        // INRIA's fixed interval: short runs end densification before any reset, which suits them
-        // (a reset needs thousands of iterations to recover)
-        opacity_reset_interval: 3000,
-        max_gaussians: a.max_gaussians,
-        strategy: a.strategy,
-        seed: a.seed,
-        background: a.background,
-        ..Default::default()
-    };
+    let mut cfg = a.config.clone();
+    cfg.fit_schedule_to_iters();
+    if let Some(until) = a.densify_until {
+        cfg.densify_until = until;
+    }
     let resumed = if a.resume { checkpoint::load(&a.out)? } else { None };
     if a.resume && resumed.is_none() {
         eprintln!("no checkpoint in {}; starting from the sparse points", a.out.display());
     }
     let scene = match &resumed {
         Some(c) => c.scene.clone(),
-        None => trainer::init_from_points(&data.points, a.sh_degree)?,
+        None => trainer::init_from_points(&data.points, a.config.sh_degree)?,
     };
     let mut t = trainer::Trainer::new(&gpu, &data, &scene, cfg)?;
     // the folder appears once the inputs are read and the device memory is taken
@@ -110,7 +80,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
         data.extent,
         gpu.info().name
     );
-    let bar = ProgressBar::new(a.iters as u64);
+    let bar = ProgressBar::new(iters as u64);
     bar.set_style(
         ProgressStyle::with_template("train [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {msg}")
             .unwrap()
@@ -122,11 +92,11 @@ pub fn run(a: TrainArgs) -> Result<()> {
     let mut test_psnr = None;
     // Without a terminal (a pipe, a log file, CI) the bar draws nothing: print a plain line about
     // every 5 % of the run instead, on the steps that read the loss back anyway.
-    let plain_every = (!std::io::stderr().is_terminal()).then(|| (a.iters / 20 / 50).max(1) * 50);
-    while t.step < a.iters {
+    let plain_every = (!std::io::stderr().is_terminal()).then(|| (iters / 20 / 50).max(1) * 50);
+    while t.step < iters {
         let log = (t.step + 1) % 50 == 0;
         t.iterate(&data, log)?;
-        if a.checkpoint_every > 0 && t.step % a.checkpoint_every == 0 && t.step < a.iters {
+        if a.checkpoint_every > 0 && t.step % a.checkpoint_every == 0 && t.step < iters {
             checkpoint::save(&t, &a.out)?;
             test_psnr = Some(t.evaluate(&data.test)?.psnr);
         }
@@ -134,7 +104,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
             let psnr = test_psnr.map(|p| format!(" test PSNR {p:.2}")).unwrap_or_default();
             let msg = format!("loss {loss:.4} L1 {l1:.4}{psnr} | {} Gaussians", t.num_gaussians());
             if plain_every.is_some_and(|n| t.step % n == 0) {
-                eprintln!("train {}/{} {:.0} s {msg}", t.step, a.iters, start.elapsed().as_secs_f64());
+                eprintln!("train {}/{} {:.0} s {msg}", t.step, iters, start.elapsed().as_secs_f64());
             }
             bar.set_message(msg);
         }

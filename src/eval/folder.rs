@@ -3,7 +3,7 @@
 
 use super::models::{FidFeatures, Lpips, NetworkInput};
 use super::{bbox_scores, floater_score, frechet_distance, full_scores, leftover_fraction, mask_scores, Scores};
-use crate::train::dataset::{find_image, load_rgb};
+use crate::scene::dataset::{find_image, load_rgb};
 use anyhow::{anyhow, bail, Context, Result};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -238,7 +238,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
     out["floaters"] = match (&cfg.data, &truth, &cfg.scene) {
         (Some(data), Some(truth), Some(scene_path)) => {
             let scene = crate::scene::ply::read_ply(scene_path)?;
-            let ds = crate::train::dataset::load(data, "images", 1)?;
+            let ds = crate::scene::dataset::load(data, "images", 1)?;
             let (mut cams, mut depths, mut regions) = (vec![], vec![], vec![]);
             for v in ds.train.iter().chain(&ds.test) {
                 let c = &v.camera;

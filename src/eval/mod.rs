@@ -2,9 +2,10 @@
 //! full image (planar RGB in [0, 1]).
 
 pub mod folder;
+pub mod image_metrics;
 pub mod models;
 
-use crate::train::loss::reference;
+use image_metrics as reference;
 
 /// PSNR over the pixels where `mask` is set (all channels); None for an empty mask.
 pub fn masked_psnr(a: &[f32], b: &[f32], mask: &[bool]) -> Option<f64> {
@@ -69,7 +70,7 @@ pub fn synth_metrics(
     renders: &[Vec<f32>],
     removed_labels: &[u8],
 ) -> anyhow::Result<Option<SynthMetrics>> {
-    use crate::train::dataset::{find_image, load_rgb};
+    use crate::scene::dataset::{find_image, load_rgb};
     let (gt_dir, mask_dir) = (crate::synth::ground_truth(data, removed_labels).images, data.join("object_mask"));
     if !gt_dir.is_dir() || !mask_dir.is_dir() {
         return Ok(None);

@@ -25,10 +25,11 @@ use kiddo::{KdTree, SquaredEuclidean};
 use std::collections::HashMap;
 
 /// How the new Gaussians behind the removed objects are made.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Fill {
     /// CoGeo-GS: back-project the completed depth of every view, fuse, prune (fuse.rs).
+    #[default]
     Depth,
     /// Baseline (Gaussian-Grouping-style): each removed Gaussian is replaced by a copy of its
     /// nearest remaining Gaussian, at its own position.
@@ -51,8 +52,8 @@ pub struct Patched {
 
 /// Stage 4: adds new Gaussians behind the removed objects to `background`. `Fill::Depth`
 /// back-projects and fuses the completed `views`, then (with `prune`) removes sparse background
-/// outliers near the patch, by `prune_config` or, when None, criteria from the patch spacing s
-/// (near 2 s, radius 3 s, 4 neighbours). `Fill::NearestCopy` copies the nearest remaining Gaussian
+/// outliers near the patch, by `prune_settings` (distances not given follow the patch spacing).
+/// `Fill::NearestCopy` copies the nearest remaining Gaussian
 /// to each of `removed_means`.
 pub fn patch_scene(
     background: GaussianScene,
@@ -61,7 +62,7 @@ pub fn patch_scene(
     removed_means: &[[f32; 3]],
     cfg: &FuseConfig,
     prune: bool,
-    prune_config: Option<PruneConfig>,
+    prune_settings: &PruneSettings,
 ) -> anyhow::Result<Patched> {
     let mut scene = background;
     if fill == Fill::NearestCopy {
@@ -74,11 +75,10 @@ pub fn patch_scene(
     let patch = patch_gaussians(&points, scene.sh_degree, cfg.opacity);
     let (mut pruned, mut prune_used) = (0, None);
     if prune && !patch.is_empty() {
-        let cfg = prune_config.unwrap_or_else(|| {
+        let cfg = prune_settings.resolve(|| {
             let mut fp: Vec<f64> = points.iter().map(|p| p.footprint).collect();
             fp.sort_by(|a, b| a.total_cmp(b));
-            let s = fp[fp.len() / 2];
-            PruneConfig { near: 2.0 * s, radius: 3.0 * s, min_neighbours: 4 }
+            fp[fp.len() / 2]
         });
         let mask = prune_mask(&scene.means, &patch.means, &cfg);
         pruned = mask.iter().filter(|&&p| p).count();
@@ -101,13 +101,17 @@ pub struct FuseView<'a> {
     pub fill: &'a [bool],
 }
 
-#[derive(Clone, Debug, serde::Serialize)]
+/// Fusion settings: the one home of their defaults, also `cogeo remove`'s flags.
+#[derive(Clone, Debug, serde::Serialize, clap::Args)]
 pub struct FuseConfig {
-    /// Sample every `stride`-th hole pixel in x and y.
+    /// Sample every Nth hole pixel in x and y for new Gaussians.
+    #[arg(long, default_value_t = 1)]
     pub stride: usize,
     /// Relative depth disagreement that counts as floating in front of another view's completion.
+    #[arg(skip = 0.03)]
     pub tolerance: f32,
     /// Initial opacity of the new Gaussians.
+    #[arg(skip = 0.9)]
     pub opacity: f32,
     /// Each surface point of the fill is made from one view only: the views are taken in order of
     /// their fill size, and a point is dropped when a view earlier in that order completed the same
@@ -115,15 +119,18 @@ pub struct FuseConfig {
     /// Without it every view's points were kept and merged per voxel, so the patch held layers of
     /// nearly coincident Gaussians whose colors the render averaged (bench/RESULTS.md: held-out
     /// masked PSNR 0.3-1.0 dB and seen-elsewhere PSNR 1.0-1.5 dB lower).
+    #[arg(skip = true)]
     pub one_owner: bool,
-    /// Each patch Gaussian is a flat ellipse on the completed surface covering its pixel's footprint
-    /// there (`surface_steps`), instead of a sphere of the pixel's size across the view ray.
+    /// Make each new Gaussian a sphere of its pixel's size (the earlier patch, for ablation) instead
+    /// of a flat ellipse on the completed surface covering the pixel's footprint there
+    /// (`surface_steps`).
+    #[arg(id = "round-patch", long = "round-patch", action = clap::ArgAction::SetFalse)]
     pub surfels: bool,
 }
 
 impl Default for FuseConfig {
     fn default() -> Self {
-        FuseConfig { stride: 1, tolerance: 0.03, opacity: 0.9, one_owner: true, surfels: true }
+        crate::config::defaults()
     }
 }
 
@@ -325,6 +332,44 @@ pub fn patch_gaussians(points: &[PatchPoint], sh_degree: u32, opacity: f32) -> G
         s.push(p.position.map(|v| v as f32), log_scales, quat, logit, &sh);
     }
     s
+}
+
+/// Pruning as the user sets it: each distance not given follows the patch spacing s.
+#[derive(Clone, Debug, serde::Serialize, clap::Args)]
+pub struct PruneSettings {
+    /// Pruning: distance to the nearest patch Gaussian that makes a background Gaussian a candidate
+    /// (scene units; default twice the patch spacing, or 2/3 of --prune-radius).
+    #[arg(id = "prune-near", long = "prune-near")]
+    pub near: Option<f64>,
+    /// Pruning: neighbourhood radius of the density test (default three times the patch spacing,
+    /// or 1.5 times --prune-near).
+    #[arg(id = "prune-radius", long = "prune-radius")]
+    pub radius: Option<f64>,
+    /// Pruning: candidates with fewer background neighbours within the radius are pruned.
+    #[arg(id = "prune-min-neighbours", long = "prune-min-neighbours", default_value_t = 4)]
+    pub min_neighbours: usize,
+}
+
+impl Default for PruneSettings {
+    fn default() -> Self {
+        crate::config::defaults()
+    }
+}
+
+impl PruneSettings {
+    /// The criteria, with `spacing()` (the patch spacing s) giving near 2 s and radius 3 s when
+    /// neither distance is set.
+    pub fn resolve(&self, spacing: impl FnOnce() -> f64) -> PruneConfig {
+        let (near, radius) = match (self.near, self.radius) {
+            (None, None) => {
+                let s = spacing();
+                (2.0 * s, 3.0 * s)
+            }
+            (Some(near), radius) => (near, radius.unwrap_or(near * 1.5)),
+            (None, Some(radius)) => (radius * 2.0 / 3.0, radius),
+        };
+        PruneConfig { near, radius, min_neighbours: self.min_neighbours }
+    }
 }
 
 #[derive(Clone, Debug, serde::Serialize)]

@@ -29,59 +29,84 @@ pub use select::{hole_mask, render_rgb, select};
 use crate::gpu::Gpu;
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
-use complete::transfer::SourceView;
+use complete::source_views::SourceView;
 use complete::{Completed, Completer, ViewInputs};
 use consensus::ConsensusView;
-use fuse::{FuseConfig, FuseView, PruneConfig};
+use fuse::{FuseConfig, FuseView, PruneSettings};
 use refine::{RefineConfig, RefineReport};
 use select::{HoleConfig, MaskedView, ViewRenderer};
 use std::time::Instant;
 
-#[derive(Clone, Debug, serde::Serialize)]
+/// Which stages run (each can be switched off for ablations).
+#[derive(Clone, Debug, serde::Serialize, clap::Args)]
 pub struct Stages {
-    /// Inpaint, complete depth and fuse new Gaussians (false: removal only).
+    /// Inpaint, complete depth and fuse new Gaussians (false: removal only). Its flag is the
+    /// ablation that only deletes the Gaussians (no inpainting, no new Gaussians, no refinement).
+    #[arg(id = "removal-only", long = "removal-only", action = clap::ArgAction::SetFalse)]
     pub complete: bool,
     /// Take colors of fill pixels from the captured images of the views that saw the completed
-    /// surface point (complete/transfer.rs).
+    /// surface point (complete/transfer.rs). Its flag is the ablation without depth-guided color
+    /// transfer (hole pixels that other views saw keep their render or are inpainted like the rest
+    /// instead of taking those views' captured colors).
+    #[arg(id = "no-transfer", long = "no-transfer", action = clap::ArgAction::SetFalse)]
     pub transfer: bool,
-    /// Prune sparse background outliers near the patch.
+    /// Prune sparse background outliers near the patch (flag: skip pruning).
+    #[arg(id = "no-prune", long = "no-prune", action = clap::ArgAction::SetFalse)]
     pub prune: bool,
-    /// Refine against the completed views.
+    /// Refine against the completed views (flag: skip the refinement stage).
+    #[arg(id = "no-refine", long = "no-refine", action = clap::ArgAction::SetFalse)]
     pub refine: bool,
 }
 
-#[derive(Clone, Debug, serde::Serialize)]
+/// Removal settings: the one home of their defaults, also `cogeo remove`'s flags (with the
+/// completion's, `complete::CompletionConfig`).
+#[derive(Clone, Debug, serde::Serialize, clap::Args)]
 pub struct RemoveOptions {
+    /// The labels to remove (the command line resolves them from --labels and --prompt).
+    #[arg(skip)]
     pub labels: Vec<u8>,
-    /// Share of a pixel's weight the removed Gaussians must carry for it to be in the hole.
+    /// A pixel is in the hole when the removed Gaussians carry more than this share of its weight.
+    #[arg(long, default_value_t = 0.3)]
     pub hole_threshold: f32,
     /// Hole dilation in pixels.
+    #[arg(long, default_value_t = 2.0)]
     pub dilate: f32,
-    /// Hole pixels the remaining Gaussians cover with at least this alpha keep their render.
+    /// Hole pixels that a kept object (a remaining Gaussian with a nonzero label) covers with at
+    /// least this alpha keep their render, unless it lies 1.25x behind the surfaces around the
+    /// hole; 1 fills the whole hole. The background Gaussians left behind the removed objects never
+    /// keep a pixel: it is filled (photo colors where other views saw it) and gets new Gaussians.
+    #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
+    #[command(flatten)]
     pub stages: Stages,
+    /// How new Gaussians are made: depth (back-projected completed depth, fused and pruned) or
+    /// nearest-copy (baseline: each removed Gaussian replaced by a copy of its nearest remaining one).
+    #[arg(long, value_enum, default_value_t)]
     pub fill: Fill,
+    #[command(flatten)]
     pub fuse: FuseConfig,
-    /// None: from the patch spacing s (near 2 s, radius 3 s, 4 neighbours).
-    pub prune: Option<PruneConfig>,
+    #[command(flatten)]
+    pub prune: PruneSettings,
+    #[command(flatten)]
     pub refine: RefineConfig,
+    /// Background color r,g,b in [0, 1] (the one the scene was trained with).
+    #[arg(long, default_value = "0,0,0", value_parser = crate::flag_values::parse_rgb)]
     pub background: [f32; 3],
+    /// Random seed (exemplar fill, refinement view order, diffusion noise).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
 }
 
 impl Default for RemoveOptions {
     fn default() -> Self {
-        RemoveOptions {
-            labels: Vec::new(),
-            hole_threshold: 0.3,
-            dilate: 2.0,
-            keep_alpha: 0.9,
-            stages: Stages { complete: true, transfer: true, prune: true, refine: true },
-            fill: Fill::Depth,
-            fuse: FuseConfig::default(),
-            prune: None,
-            refine: RefineConfig::default(),
-            background: [0.0; 3],
-        }
+        crate::config::defaults()
+    }
+}
+
+impl RemoveOptions {
+    /// The refinement's settings with the removal's background and seed.
+    pub fn refine_config(&self) -> RefineConfig {
+        RefineConfig { background: self.background, seed: self.seed, ..self.refine.clone() }
     }
 }
 
@@ -217,7 +242,7 @@ pub fn remove(
         let removed_means: Vec<[f32; 3]> =
             scene.means.iter().zip(&selection.removed).filter(|(_, &r)| r).map(|(m, _)| *m).collect();
         let (fill, prune) = (opts.fill, opts.stages.prune);
-        let patch = fuse::patch_scene(result, fill, &fviews, &removed_means, &opts.fuse, prune, opts.prune.clone())?;
+        let patch = fuse::patch_scene(result, fill, &fviews, &removed_means, &opts.fuse, prune, &opts.prune)?;
         (result, fusion, pruned, prune_used) = (patch.scene, Some(patch.report), patch.pruned, patch.prune);
         clock.lap("fuse");
         // 4b. which invented pixels each view's refinement keeps
@@ -248,7 +273,7 @@ pub fn remove(
             let targets: Vec<Vec<f32>> = completed.iter().map(|k| k.rgb.clone()).collect();
             let total = opts.refine.iters as usize;
             let (refined, report) =
-                refine::refine(gpu, &result, cameras, targets, Some(&masks), extent, &opts.refine, |it| {
+                refine::refine(gpu, &result, cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
                     progress("refine", it as usize, total)
                 })?;
             result = refined;

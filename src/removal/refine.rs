@@ -13,8 +13,8 @@
 //! each Gaussian instead raised held-out seen-elsewhere PSNR by 0.5 dB on scenes two and three.
 
 use crate::gpu::Gpu;
+use crate::scene::dataset::{Dataset, View};
 use crate::scene::{Camera, GaussianScene};
-use crate::train::dataset::{Dataset, View};
 use crate::train::trainer::{Frozen, TrainConfig, Trainer};
 use anyhow::Result;
 
@@ -40,35 +40,54 @@ pub const SHAPE_LR_GAIN: f32 = 2.0;
 /// against its original render: 43.7 dB at 1, 41.4 at 4.
 pub const HOLE_WEIGHT: f32 = 4.0;
 
-#[derive(Clone, Debug, serde::Serialize)]
+/// Refinement settings: the one home of their defaults, also `cogeo remove`'s flags.
+#[derive(Clone, Debug, serde::Serialize, clap::Args)]
 pub struct RefineConfig {
+    /// Refinement iterations (the first half with geometry frozen).
+    #[arg(id = "refine-iters", long = "refine-iters", default_value_t = 150)]
     pub iters: u32,
     /// Share of the iterations with geometry frozen.
+    #[arg(skip = 0.5)]
     pub frozen_fraction: f32,
-    /// Per-step update norm bound of each Gaussian in each geometry tensor once it is enabled.
+    /// Trust region of the second half: each Gaussian's per-step update of its position, of its
+    /// log-scales and of its rotation is clipped to this Euclidean norm.
+    #[arg(long, default_value_t = 0.01)]
     pub trust_radius: f32,
+    /// Set by the removal from its own `background` (`RemoveOptions::refine_config`).
+    #[arg(skip)]
+    #[serde(skip)]
     pub background: [f32; 3],
+    /// Set by the removal from its own `seed`.
+    #[arg(skip)]
+    #[serde(skip)]
     pub seed: u64,
-    /// Multiplies the SH learning rates of training (`TrainConfig::color_lr_gain`).
+    /// Refinement learning rate of the colors (SH coefficients) as a multiple of training's
+    /// (`TrainConfig::color_lr_gain`). Adam moves a coefficient by about its rate per step, so at
+    /// training's rate the short refinement cannot recolor the Gaussians left behind the objects.
+    #[arg(id = "refine-color-lr-gain", long = "refine-color-lr-gain", default_value_t = COLOR_LR_GAIN)]
     pub color_lr_gain: f32,
-    /// Multiplies the scale and rotation learning rates (`TrainConfig::shape_lr_gain`).
+    /// Refinement learning rate of the Gaussians' scales and rotations as a multiple of
+    /// training's (`TrainConfig::shape_lr_gain`): in the short second half the patch's
+    /// footprint-sized ellipses must take the shape of the surface's texture, not just settle.
+    #[arg(id = "refine-shape-lr-gain", long = "refine-shape-lr-gain", default_value_t = SHAPE_LR_GAIN)]
     pub shape_lr_gain: f32,
-    /// Loss weight of the hole's pixels relative to the rest of each view (`loss_weights`).
+    /// Refinement loss weight of each view's hole pixels relative to its other pixels (>= 0;
+    /// `loss_weights`). Outside the hole the target is the scene's own render, which only anchors
+    /// the background; the hole is a tenth or so of a view and carries the colors the other views
+    /// captured.
+    #[arg(
+        id = "refine-hole-weight",
+        long = "refine-hole-weight",
+        default_value_t = HOLE_WEIGHT,
+        value_parser = crate::flag_values::parse_weight,
+        allow_negative_numbers = true
+    )]
     pub hole_weight: f32,
 }
 
 impl Default for RefineConfig {
     fn default() -> Self {
-        RefineConfig {
-            iters: 150,
-            frozen_fraction: 0.5,
-            trust_radius: 0.01,
-            background: [0.0; 3],
-            seed: 0,
-            color_lr_gain: COLOR_LR_GAIN,
-            shape_lr_gain: SHAPE_LR_GAIN,
-            hole_weight: HOLE_WEIGHT,
-        }
+        crate::config::defaults()
     }
 }
 

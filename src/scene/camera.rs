@@ -19,9 +19,7 @@ pub struct Camera {
     pub translation: [f64; 3],
 }
 
-/// The largest image width or height cogeo accepts (pixel counts stay below 2^30, so pixel indices
-/// fit u32 arithmetic everywhere).
-pub const MAX_IMAGE_SIDE: u32 = 32768;
+pub use crate::io::MAX_IMAGE_SIDE;
 
 impl Camera {
     /// Checks what every pass assumes of a loaded camera: a size in 1..=MAX_IMAGE_SIDE, positive

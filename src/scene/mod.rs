@@ -3,6 +3,7 @@
 pub mod builtin;
 pub mod camera;
 pub mod colmap;
+pub mod dataset;
 pub mod ply;
 pub mod pose_check;
 

@@ -8,8 +8,8 @@
 
 use crate::io::{write_atomic, write_exr, write_png, write_png_rgb};
 use crate::rng::Rng;
+use crate::scene::dataset::is_test_view;
 use crate::scene::Camera;
-use crate::train::dataset::is_test_view;
 use anyhow::{bail, Context, Result};
 use raycast::V3;
 use std::io::Write;

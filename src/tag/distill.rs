@@ -231,33 +231,36 @@ pub fn nearest_neighbors(means: &[[f32; 3]], k: usize) -> Result<Vec<u32>> {
     Ok(rows.concat())
 }
 
-#[derive(Clone, Debug)]
+/// Distillation settings: the one home of their defaults, also `cogeo tag`'s flags.
+#[derive(Clone, Debug, clap::Args)]
 pub struct DistillConfig {
+    /// Identity feature dimension D (1..32).
+    #[arg(long, default_value_t = 16)]
     pub dim: usize,
+    /// Distillation iterations (one training view each).
+    #[arg(long, default_value_t = 1000)]
     pub iters: u32,
-    /// Weight of the spatial KL loss.
+    /// Weight lambda of the kNN KL spatial loss (0 disables it).
+    #[arg(long, default_value_t = 0.1)]
     pub lambda: f32,
-    /// Neighbours per sampled Gaussian.
+    /// Neighbours k of the spatial loss.
+    #[arg(long, default_value_t = 5)]
     pub knn: usize,
     /// Gaussians sampled per iteration for L_space.
+    #[arg(skip = 4096u32)]
     pub samples: u32,
+    #[arg(skip = 0.01)]
     pub lr_features: f32,
+    #[arg(skip = 0.005)]
     pub lr_classifier: f32,
+    /// Random seed (feature and classifier initialization, view order, KL samples).
+    #[arg(long, default_value_t = 0)]
     pub seed: u64,
 }
 
 impl Default for DistillConfig {
     fn default() -> Self {
-        DistillConfig {
-            dim: 16,
-            iters: 1000,
-            lambda: 0.1,
-            knn: 5,
-            samples: 4096,
-            lr_features: 0.01,
-            lr_classifier: 0.005,
-            seed: 0,
-        }
+        crate::config::defaults()
     }
 }
 

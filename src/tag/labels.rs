@@ -7,8 +7,8 @@
 //!
 //! Masks whose size differs from the view's image are resized with nearest-neighbour sampling.
 
+use crate::scene::dataset::find_image;
 use crate::scene::Camera;
-use crate::train::dataset::find_image;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 

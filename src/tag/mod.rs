@@ -19,10 +19,11 @@ use crate::scene::{Camera, ExtraProperty, GaussianScene, PlyType};
 use anyhow::{bail, Result};
 use labels::{LabelMaps, IGNORE};
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Feature distillation with a classifier (cross-entropy + kNN KL consistency).
+    #[default]
     Distill,
     /// Closed-form voting of blending weights per label.
     Vote,
@@ -215,13 +216,25 @@ pub fn scene_labels(scene: &GaussianScene) -> Option<Vec<u8>> {
     Some(p.values.iter().map(|&v| v.clamp(0.0, 255.0) as u8).collect())
 }
 
-/// How to tag.
-#[derive(Clone, Debug)]
+/// How to tag: the one home of the tagging defaults, also `cogeo tag`'s flags.
+#[derive(Clone, Debug, clap::Args)]
 pub struct TagOptions {
+    /// distill: identity features + classifier (cross-entropy + kNN KL); vote: closed-form blending
+    /// weight vote; project: label under each Gaussian's projected center (naive baseline).
+    #[arg(long, value_enum, default_value_t)]
     pub method: Method,
+    #[command(flatten)]
     pub distill: distill::DistillConfig,
-    /// Background margin of the vote (see `labels_from_votes`).
+    /// Vote: an object label needs a vote share at least this much above the background's
+    /// (see `labels_from_votes`).
+    #[arg(long, default_value_t = 0.0)]
     pub margin: f32,
+}
+
+impl Default for TagOptions {
+    fn default() -> Self {
+        crate::config::defaults()
+    }
 }
 
 pub struct Tagged {

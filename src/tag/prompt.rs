@@ -19,6 +19,32 @@ use crate::onnx::{Model, Tensor};
 use anyhow::{anyhow, bail, Context, Result};
 use std::path::Path;
 
+/// The models that turn text prompts into label maps: the one home of their settings' defaults,
+/// also `cogeo tag`'s flags.
+#[derive(Clone, Debug, clap::Args)]
+pub struct PromptModels {
+    /// Open-vocabulary detector (ONNX): inputs image [1,3,H,W] in [0,1] and text_embeds [Q,E];
+    /// outputs boxes [Q,K,4] (normalized x0,y0,x1,y1) and scores [Q,K].
+    #[arg(long)]
+    pub detector: Option<std::path::PathBuf>,
+    /// Box-prompted segmenter (ONNX, SAM-style): inputs image [1,3,H,W] in [0,1] and box [1,4]
+    /// (pixels x0,y0,x1,y1); output mask_logits [1,1,H,W] (> 0 = object).
+    #[arg(long)]
+    pub segmenter: Option<std::path::PathBuf>,
+    /// JSON object mapping each prompt to its text embedding (from the detector's text encoder).
+    #[arg(long)]
+    pub prompt_embeddings: Option<std::path::PathBuf>,
+    /// A prompt's best box is used when its detection score reaches this.
+    #[arg(long, default_value_t = 0.3)]
+    pub box_threshold: f32,
+}
+
+impl Default for PromptModels {
+    fn default() -> Self {
+        crate::config::defaults()
+    }
+}
+
 pub struct PromptSegmenter {
     detector: Model,
     segmenter: Model,

@@ -1,8 +1,8 @@
-//! Training: the photometric loss, Adam, datasets and the training loop.
+//! Training: the photometric loss, Adam, the training loop, densification and checkpoints.
 
 pub mod adam;
 pub mod checkpoint;
-pub mod dataset;
+pub mod config;
 pub mod fused;
 pub mod loss;
 pub mod mcmc;

@@ -8,7 +8,6 @@
 //! train/mcmc.rs, which also adds regularizer gradients before Adam and a noise pass after it).
 
 use super::adam::{Adam, Moments};
-use super::dataset::{Dataset, View};
 use super::fused::{GroupStep, ProjectBackwardAdam};
 use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
 use super::mcmc::{self, McmcPasses, RelocationStats};
@@ -17,75 +16,13 @@ use crate::render::backward::{Backward, PixelGradients, SceneGradients};
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
 use crate::rng::Rng;
 use crate::scene::colmap::Point3D;
+use crate::scene::dataset::{Dataset, View};
 use crate::scene::{logit, sh_coeffs, GaussianScene, SH_C0};
 use anyhow::{bail, Result};
 
 mod adc;
 
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct TrainConfig {
-    pub iters: u32,
-    /// Highest SH degree (reached after 1000 * degree iterations).
-    pub sh_degree: u32,
-    pub densify: bool,
-    pub densify_from: u32,
-    pub densify_until: u32,
-    pub densify_interval: u32,
-    /// Mean view-space positional gradient (NDC units) above which Gaussians are cloned or split.
-    pub grad_threshold: f32,
-    pub opacity_reset_interval: u32,
-    /// Densification never grows the scene past this many Gaussians (the MCMC strategy grows to it).
-    pub max_gaussians: usize,
-    #[serde(default)]
-    pub strategy: Strategy,
-    pub seed: u64,
-    pub background: [f32; 3],
-    /// Multiplies the SH learning rates (1: INRIA's). The removal's short refinement raises it:
-    /// Adam moves a coefficient by about its learning rate per step, so the INRIA rate needs
-    /// hundreds of steps to recolor a Gaussian.
-    #[serde(default = "unit_gain")]
-    pub color_lr_gain: f32,
-    /// Multiplies the scale and rotation learning rates (1: INRIA's); the removal's refinement
-    /// raises it for the same reason as `color_lr_gain`.
-    #[serde(default = "unit_gain")]
-    pub shape_lr_gain: f32,
-}
-
-fn unit_gain() -> f32 {
-    1.0
-}
-
-impl Default for TrainConfig {
-    fn default() -> Self {
-        TrainConfig {
-            iters: 30_000,
-            sh_degree: 3,
-            densify: true,
-            densify_from: 500,
-            densify_until: 15_000,
-            densify_interval: 100,
-            grad_threshold: 2e-4,
-            opacity_reset_interval: 3000,
-            max_gaussians: 3_000_000,
-            strategy: Strategy::Adc,
-            seed: 0,
-            background: [0.0; 3],
-            color_lr_gain: 1.0,
-            shape_lr_gain: 1.0,
-        }
-    }
-}
-
-/// How the set of Gaussians changes during training.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
-pub enum Strategy {
-    /// INRIA adaptive density control: clone / split / prune and periodic opacity reset.
-    #[default]
-    Adc,
-    /// 3DGS-MCMC: dead Gaussians relocated onto live ones, growth by 5 % up to the budget, opacity
-    /// and scale regularizers, position noise (train/mcmc.rs).
-    Mcmc,
-}
+pub use super::config::{Strategy, TrainConfig};
 
 /// Which parameter groups are frozen (no update).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]

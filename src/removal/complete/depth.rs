@@ -63,9 +63,10 @@ pub enum PriorSpace {
 }
 
 /// Which ONNX depth contract a model follows.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
 pub enum DepthContract {
     /// Depth Anything V2: sides multiple of 14, affine-invariant disparity out.
+    #[default]
     DepthAnythingV2,
     /// Depth Anything 3: 504 x 504 in, depth out.
     DepthAnything3,

@@ -57,7 +57,7 @@ impl Inpainter {
     /// name like the images (PNG or JPEG); a view of another size is resized bilinearly. Errors
     /// name the folder and the missing view.
     pub fn provided(dir: &Path, names: &[String], sizes: &[(u32, u32)]) -> Result<Inpainter> {
-        use crate::train::dataset::{find_image, load_rgb};
+        use crate::scene::dataset::{find_image, load_rgb};
         if !dir.is_dir() {
             bail!("{}: --inpainted is not a folder", dir.display());
         }

@@ -16,6 +16,7 @@
 //!   texture with its period under perspective.
 //! - `photo_depth`: the hole depth's scale that makes the other views agree on its colors.
 //! - `transfer`: colors of the completed surface from the other views that saw it.
+//! - `source_views`: the edited views as the other views see them, for both of those.
 
 pub mod depth;
 pub mod diffusion;
@@ -24,18 +25,22 @@ pub mod harmonic;
 pub mod inpaint;
 pub mod photo_depth;
 pub mod rectify;
+pub mod source_views;
 pub mod surfaces;
 pub mod transfer;
 
+use crate::gpu::Gpu;
 use crate::scene::Camera;
 use anyhow::Result;
-use depth::{DepthPrior, DepthView, PriorSpace};
+use depth::{DepthContract, DepthPrior, DepthView, PriorSpace};
 use diffusion::OnnxDenoiser;
 use inpaint::Inpainter;
 use photo_depth::{correct_hole_depth, DepthScale};
 use rectify::Intrinsics;
+use source_views::SourceView;
+use std::path::PathBuf;
 use surfaces::Plane;
-use transfer::{transfer, SourceView, Transfer};
+use transfer::{transfer, Transfer};
 
 /// How far (relative) a view's original depth may be from a point's for that view to count as
 /// having seen it when the hole's depth is corrected by photo-consistency.
@@ -48,6 +53,74 @@ const PHOTO_DEPTH_TOLERANCE: f64 = 0.05;
 /// this test, half of them by less than 8 %. At 10 % its seen-elsewhere PSNR rose 0.8 dB
 /// (bench/RESULTS.md).
 const TRANSFER_TOLERANCE: f64 = 0.10;
+
+/// The built-in inpainters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum BuiltInInpainter {
+    #[default]
+    Exemplar,
+    Harmonic,
+}
+
+/// Completion settings: the one home of their defaults, also `cogeo remove`'s flags. The models
+/// they name are loaded by `Completer::load`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct CompletionConfig {
+    /// The built-in inpainter: exemplar (texture copied patch by patch from around the hole, each
+    /// background surface from itself; PatchMatch on the GPU) or harmonic (a smooth membrane fill,
+    /// the ablation). Ignored with --inpaint-model or --inpainted.
+    #[arg(long, value_enum, default_value_t)]
+    pub inpainter: BuiltInInpainter,
+    /// ONNX inpainting model with the LaMa contract (image [1,3,512,512] in [0,1] and mask
+    /// [1,1,512,512], 1 = hole, in; RGB out), instead of the built-in inpainter.
+    #[arg(long, conflicts_with = "inpainted")]
+    pub inpaint_model: Option<PathBuf>,
+    /// Bring your own inpainting: a folder of inpainted training views named like the images (the
+    /// output of LaMa, Stable Diffusion, an image editor, ...), used as the RGB completion of those
+    /// views exactly inside the holes; depth, color transfer, fusion and refinement run unchanged.
+    /// Inpaint at least the removed objects' masks, dilated a few pixels (a previous run's `mask/`
+    /// shows the region cogeo fills). Views of another size are resized.
+    #[arg(long)]
+    pub inpainted: Option<PathBuf>,
+    /// ONNX monocular depth model (see --depth-contract). Default: the built-in prior (harmonic
+    /// completion of the rendered inverse depth from the hole boundary).
+    #[arg(long)]
+    pub depth_model: Option<PathBuf>,
+    /// Contract of --depth-model: depth-anything-v2 (ImageNet-normalized RGB, sides multiples of 14,
+    /// affine-invariant disparity out) or depth-anything3 (504x504 in, depth out).
+    #[arg(long, value_enum, default_value_t)]
+    pub depth_contract: DepthContract,
+    /// ONNX depth-inpainting denoiser run as a masked DDIM loop (inputs sample, timestep, alpha_bar,
+    /// image, mask; output the predicted noise). Default: built-in edge-aware refinement.
+    #[arg(long)]
+    pub depth_refiner: Option<PathBuf>,
+    /// Sweeps of the built-in edge-aware depth refinement (0 = keep the anchored depth).
+    #[arg(long, default_value_t = 60)]
+    pub depth_sweeps: usize,
+    /// DDIM steps of --depth-refiner.
+    #[arg(long, default_value_t = 20)]
+    pub diffusion_steps: usize,
+    /// Ablation: no depth prior; new Gaussians are placed at the depth rendered after removal, and
+    /// the built-in inpainter fills without the background planes.
+    #[arg(id = "no-depth-guidance", long = "no-depth-guidance", action = clap::ArgAction::SetFalse)]
+    pub depth_guidance: bool,
+    /// Keep each hole's completed depth as it is (ablation). By default, before the color
+    /// transfer and the fusion, it is corrected by photo-consistency: where two or more other
+    /// views saw the hole's surface, the depth at which their photos agree on its color (one
+    /// factor per hole, then per pixel within 3 % of it). Runs with --no-transfer too.
+    #[arg(id = "no-photo-depth", long = "no-photo-depth", action = clap::ArgAction::SetFalse)]
+    pub photo_depth: bool,
+    /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.
+    #[arg(long, default_value_t = 4.0)]
+    pub soft_radius: f32,
+}
+
+impl Default for CompletionConfig {
+    fn default() -> Self {
+        crate::config::defaults()
+    }
+}
 
 /// The models and settings of completion.
 pub struct Completer {
@@ -105,6 +178,37 @@ pub struct Completed {
 }
 
 impl Completer {
+    /// Loads the models `cfg` names (before any GPU work, so a bad path fails at once).
+    /// `views` names the edited views and gives their sizes, for `--inpainted`.
+    pub fn load(gpu: &Gpu, cfg: &CompletionConfig, seed: u64, views: &[(String, (u32, u32))]) -> Result<Completer> {
+        let inpainter = match (&cfg.inpaint_model, &cfg.inpainted) {
+            (Some(p), _) => Inpainter::onnx(p)?,
+            (None, Some(dir)) => {
+                let names: Vec<String> = views.iter().map(|v| v.0.clone()).collect();
+                let sizes: Vec<(u32, u32)> = views.iter().map(|v| v.1).collect();
+                Inpainter::provided(dir, &names, &sizes)?
+            }
+            (None, None) => match cfg.inpainter {
+                BuiltInInpainter::Exemplar => Inpainter::Exemplar(Box::new(exemplar::ExemplarFill::new(gpu, seed)?)),
+                BuiltInInpainter::Harmonic => Inpainter::Harmonic,
+            },
+        };
+        Ok(Completer {
+            inpainter,
+            prior: match &cfg.depth_model {
+                Some(p) => DepthPrior::onnx(p, cfg.depth_contract)?,
+                None => DepthPrior::BuiltIn,
+            },
+            refiner: cfg.depth_refiner.as_deref().map(OnnxDenoiser::load).transpose()?,
+            soft_radius: cfg.soft_radius,
+            refine_sweeps: cfg.depth_sweeps,
+            diffusion_steps: cfg.diffusion_steps,
+            depth_guidance: cfg.depth_guidance,
+            photo_depth: cfg.photo_depth,
+            seed,
+        })
+    }
+
     /// Stage 3: completes every edited view (view i gets index i, which seeds its diffusion noise).
     pub fn complete_views(
         &mut self,

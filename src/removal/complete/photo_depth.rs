@@ -14,7 +14,7 @@
 //! scene one: the hole's depth error went from -1.9 % to -0.03 % (median), and the transferred
 //! colors from 24.7 to 27.7 dB against the exact truth.
 
-use super::transfer::SourceView;
+use super::source_views::{back_project, project, sees, SourceView};
 use crate::image_ops::sample_bilinear;
 use crate::scene::Camera;
 
@@ -53,27 +53,6 @@ const MIN_WINDOW_PIXELS: usize = 8;
 /// Hole pixels no two views saw: the distance (4-connected pixels) over which the nearest scored
 /// pixel's correction fades out.
 const FADE_PIXELS: usize = 8;
-
-/// World point of pixel `p` (center, row-major index) of `camera` at view depth `z`.
-pub fn back_project(camera: &Camera, p: usize, z: f64) -> [f64; 3] {
-    let w = camera.width as usize;
-    camera.pixel_point(p % w, p / w, z)
-}
-
-/// Where `world` lands in source `s`: image position, pixel index and view depth; None when it
-/// is behind the camera or outside the image.
-pub fn project(s: &SourceView, world: [f64; 3]) -> Option<(f64, f64, usize, f64)> {
-    let (x, y, z) = s.camera.project_to_image(world)?;
-    Some((x, y, y as usize * s.camera.width as usize + x as usize, z))
-}
-
-/// Where source `s` saw `world`, as the transfer asks (off its hole, where its original render
-/// is opaque and at the point's depth within `tolerance`, relative): the image position, or None.
-pub fn sees(s: &SourceView, world: [f64; 3], tolerance: f64) -> Option<(f64, f64)> {
-    let (x, y, q, z) = project(s, world)?;
-    let d = s.depth[q] as f64;
-    (!s.hole[q] && s.alpha[q] > 0.5 && (z - d).abs() <= tolerance * d).then_some((x, y))
-}
 
 /// The hole pixels of one view that two or more other views saw, with those views.
 struct SeenPixels<'a> {

@@ -5,21 +5,9 @@
 //! invented. Only a good depth puts the point where another view really saw it, so this is where
 //! depth guidance pays off in color, not just in geometry.
 
-use super::photo_depth::{back_project, sees};
+use super::source_views::{back_project, sees, SourceView};
 use crate::image_ops::sample_lanczos3;
 use crate::scene::Camera;
-
-/// One edited view as the other views see it.
-pub struct SourceView<'a> {
-    pub camera: &'a Camera,
-    /// The captured image (planar RGB in [0, 1]).
-    pub photo: &'a [f32],
-    /// The dilated hole: the removed objects may cover these pixels in the photo.
-    pub hole: &'a [bool],
-    /// Expected depth and alpha of the original render (with the objects).
-    pub depth: &'a [f32],
-    pub alpha: &'a [f32],
-}
 
 /// Colors found for the fill pixels of one target view.
 pub struct Transfer {

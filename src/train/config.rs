@@ -1,0 +1,83 @@
+//! Training settings: the one home of their defaults, which are also `cogeo train`'s flags
+//! (crate::config). INRIA's schedule is for 30,000 iterations; `fit_schedule_to_iters` shortens
+//! it for short runs.
+
+use crate::flag_values::parse_rgb;
+
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize, clap::Args)]
+#[serde(default)]
+pub struct TrainConfig {
+    /// Training iterations.
+    #[arg(long, default_value_t = 30_000)]
+    pub iters: u32,
+    /// Highest SH degree (one more band every 1000 iterations).
+    #[arg(long, default_value_t = 3)]
+    pub sh_degree: u32,
+    /// Disable densification (no clone / split / prune / opacity reset, no MCMC relocation).
+    #[arg(id = "no-densify", long = "no-densify", action = clap::ArgAction::SetFalse)]
+    pub densify: bool,
+    /// First densification iteration (INRIA's).
+    #[arg(skip = 500u32)]
+    pub densify_from: u32,
+    /// Last densification iteration (INRIA's).
+    #[arg(skip = 15_000u32)]
+    pub densify_until: u32,
+    #[arg(skip = 100u32)]
+    pub densify_interval: u32,
+    /// Mean view-space positional gradient (NDC units) above which Gaussians are cloned or split.
+    #[arg(skip = 2e-4)]
+    pub grad_threshold: f32,
+    /// INRIA's fixed interval: short runs end densification before any reset, which suits them
+    /// (a reset needs thousands of iterations to recover).
+    #[arg(skip = 3000u32)]
+    pub opacity_reset_interval: u32,
+    /// Gaussian budget: adc never grows past it; mcmc grows to it.
+    #[arg(long, default_value_t = 3_000_000)]
+    pub max_gaussians: usize,
+    /// Densification strategy: adc = INRIA adaptive density control (clone / split / prune, opacity
+    /// reset); mcmc = 3DGS-MCMC (relocate transparent Gaussians onto opaque ones, grow by 5 % every
+    /// 100 iterations up to --max-gaussians, opacity/scale regularizers and position noise).
+    #[arg(long, value_enum, default_value_t)]
+    pub strategy: Strategy,
+    /// Random seed (view order, splits).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Background color r,g,b in [0, 1] behind the Gaussians.
+    #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
+    pub background: [f32; 3],
+    /// Multiplies the SH learning rates (1: INRIA's). The removal's short refinement raises it:
+    /// Adam moves a coefficient by about its learning rate per step, so the INRIA rate needs
+    /// hundreds of steps to recolor a Gaussian.
+    #[arg(skip = 1.0)]
+    pub color_lr_gain: f32,
+    /// Multiplies the scale and rotation learning rates (1: INRIA's); the removal's refinement
+    /// raises it for the same reason as `color_lr_gain`.
+    #[arg(skip = 1.0)]
+    pub shape_lr_gain: f32,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        crate::config::defaults()
+    }
+}
+
+impl TrainConfig {
+    /// A run shorter than INRIA's densifies from a tenth of its iterations at the latest and
+    /// until half of them at the latest.
+    pub fn fit_schedule_to_iters(&mut self) {
+        self.densify_from = self.densify_from.min(self.iters / 10);
+        self.densify_until = self.densify_until.min(self.iters / 2);
+    }
+}
+
+/// How the set of Gaussians changes during training.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum)]
+pub enum Strategy {
+    /// INRIA adaptive density control: clone / split / prune and periodic opacity reset.
+    #[default]
+    Adc,
+    /// 3DGS-MCMC: dead Gaussians relocated onto live ones, growth by 5 % up to the budget, opacity
+    /// and scale regularizers, position noise (train/mcmc.rs).
+    Mcmc,
+}
