@@ -28,7 +28,7 @@ pub mod synth;
 pub mod tag;
 pub mod train;
 
-/// SPIR-V of every `shaders/glsl/*.comp`, compiled by build.rs.
+/// SPIR-V of every `shaders/glsl/*/*.comp` (and the compare-and-swap variants), compiled by build.rs.
 pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }

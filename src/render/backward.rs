@@ -12,7 +12,7 @@ use crate::shaders;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-/// Mirrors `shaders/glsl/include/backward_params.glsl`.
+/// Mirrors `shaders/glsl/common/backward_params.glsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct BackwardParams {

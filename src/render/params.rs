@@ -1,4 +1,4 @@
-//! The per-frame parameter block of the render passes; mirrors `shaders/glsl/include/render_params.glsl`
+//! The per-frame parameter block of the render passes; mirrors `shaders/glsl/common/render_params.glsl`
 //! field for field (std430: pointers first, then 4-byte scalars).
 
 use bytemuck::{Pod, Zeroable};

@@ -23,7 +23,7 @@ use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 use rayon::prelude::*;
 
-/// Limits of the classifier shaders (include/classifier.glsl).
+/// Limits of the classifier shaders (shaders/glsl/tag/classifier.glsl).
 pub const MAX_DIM: usize = 32;
 pub const MAX_CLASSES: usize = 32;
 

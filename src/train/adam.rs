@@ -9,7 +9,7 @@ pub const BETA1: f32 = 0.9;
 pub const BETA2: f32 = 0.999;
 pub const EPS: f32 = 1e-15;
 
-/// The scalars of one Adam step of one tensor; mirrors `AdamStep` in include/adam_step.glsl.
+/// The scalars of one Adam step of one tensor; mirrors `AdamStep` in train/adam_step.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub(crate) struct AdamStep {

@@ -16,7 +16,7 @@ use crate::shaders;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-/// Mirrors `FusedAdam` in include/project_backward_adam_main.glsl (std430, pointers first).
+/// Mirrors `FusedAdam` in shaders/glsl/train/project_backward_adam.comp (std430, pointers first).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct FusedAdamParams {

@@ -1,3 +1,4 @@
+#version 460
 // Backward of project.comp, one thread per Gaussian: the parameter gradients of the view just
 // blended (project_backward_grads.glsl), accumulated into the parameter gradients over views.
 #ifndef NO_FLOAT_ATOMICS

@@ -1,3 +1,4 @@
+#version 460
 // L_obj: per-pixel softmax cross-entropy of the classifier applied to the rendered identity feature
 // F(u) against the view's label O(u), averaged over the supervised pixels (`weight` = 1 / their
 // count; label 255 = unsupervised). Writes dL/dF(u) (the feature backward's upstream) and accumulates

@@ -1,3 +1,4 @@
+#version 460
 // Backward of blend.comp. One 16x16 workgroup per tile (each of its subgroups on its own) walks the
 // tile's intersections back to front, recovering each contributor's transmittance from the final one
 // (T_i = T_{i+1} / (1 - alpha_i)) and the sums of what lies behind it, so

@@ -1,3 +1,4 @@
+#version 460
 // Backward of blend_features.comp with respect to the features: dL/df_i = sum over pixels of
 // w_i dL/dF(pixel). The weights are replayed front to back with the forward's own decisions. Gradients
 // through the weights into geometry are not produced: feature training keeps geometry frozen.

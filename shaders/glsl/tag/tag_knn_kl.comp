@@ -1,3 +1,4 @@
+#version 460
 // L_space: for `samples` Gaussians i drawn uniformly (a hash of (seed, s)), the mean over their k
 // nearest neighbours j of KL(p_i || p_j), p = softmax(W f + b), scaled by `weight` = lambda /
 // (samples k). With a = log p_i - log p_j and KL = sum p_i a:

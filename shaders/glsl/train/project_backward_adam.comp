@@ -1,3 +1,4 @@
+#version 460
 // Projection backward fused with Adam, one thread per Gaussian: the parameter gradients of the
 // view just blended (project_backward_grads.glsl) go straight into the Adam step of every element
 // of the Gaussian. A training step of one view thereby never writes, zeroes or reads back the
