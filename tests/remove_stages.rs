@@ -7,7 +7,7 @@ mod common;
 use cogeo::removal::complete::depth::{self, DepthContract, DepthPrior, DepthView, PriorSpace};
 use cogeo::removal::complete::diffusion::{masked_ddim, OnnxDenoiser};
 use cogeo::removal::complete::inpaint::Inpainter;
-use cogeo::removal::fuse::{prune_mask, PruneConfig};
+use cogeo::removal::prune::{prune_mask, PruneConfig};
 use common::onnx;
 
 fn tmp(name: &str) -> std::path::PathBuf {

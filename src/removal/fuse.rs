@@ -16,9 +16,9 @@
 //! Points that still fall in one voxel (the median footprint) are merged: position and color
 //! averaged, the shape of the first.
 //!
-//! Pruning (kiddo): a background Gaussian is pruned when it lies within `near` of a patch Gaussian
-//! AND has fewer than `min_neighbours` other background Gaussians within `radius`.
+//! Pruning of sparse background outliers near the patch is in prune.rs.
 
+use super::prune::{prune_mask, PruneSettings};
 use crate::removal::complete::{depth, surfaces::local_plane};
 use crate::scene::{Camera, GaussianScene, SH_C0};
 use kiddo::{KdTree, SquaredEuclidean};
@@ -44,7 +44,7 @@ pub struct Patched {
     pub report: serde_json::Value,
     pub pruned: usize,
     /// The pruning criteria used, when pruning ran.
-    pub prune: Option<PruneConfig>,
+    pub prune: Option<super::prune::PruneConfig>,
     /// Per view (`Fill::Depth`), the pixels whose back-projected point was kept: the surface
     /// points the view owns in the patch. Empty for the nearest-copy fill.
     pub owned: Vec<Vec<bool>>,
@@ -332,82 +332,6 @@ pub fn patch_gaussians(points: &[PatchPoint], sh_degree: u32, opacity: f32) -> G
         s.push(p.position.map(|v| v as f32), log_scales, quat, logit, &sh);
     }
     s
-}
-
-/// Pruning as the user sets it: each distance not given follows the patch spacing s.
-#[derive(Clone, Debug, serde::Serialize, clap::Args)]
-pub struct PruneSettings {
-    /// Pruning: distance to the nearest patch Gaussian that makes a background Gaussian a candidate
-    /// (scene units; default twice the patch spacing, or 2/3 of --prune-radius).
-    #[arg(id = "prune-near", long = "prune-near")]
-    pub near: Option<f64>,
-    /// Pruning: neighbourhood radius of the density test (default three times the patch spacing,
-    /// or 1.5 times --prune-near).
-    #[arg(id = "prune-radius", long = "prune-radius")]
-    pub radius: Option<f64>,
-    /// Pruning: candidates with fewer background neighbours within the radius are pruned.
-    #[arg(id = "prune-min-neighbours", long = "prune-min-neighbours", default_value_t = 4)]
-    pub min_neighbours: usize,
-}
-
-impl Default for PruneSettings {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
-
-impl PruneSettings {
-    /// The criteria, with `spacing()` (the patch spacing s) giving near 2 s and radius 3 s when
-    /// neither distance is set.
-    pub fn resolve(&self, spacing: impl FnOnce() -> f64) -> PruneConfig {
-        let (near, radius) = match (self.near, self.radius) {
-            (None, None) => {
-                let s = spacing();
-                (2.0 * s, 3.0 * s)
-            }
-            (Some(near), radius) => (near, radius.unwrap_or(near * 1.5)),
-            (None, Some(radius)) => (radius * 2.0 / 3.0, radius),
-        };
-        PruneConfig { near, radius, min_neighbours: self.min_neighbours }
-    }
-}
-
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct PruneConfig {
-    /// A background Gaussian within this distance of a patch Gaussian is a candidate.
-    pub near: f64,
-    /// Neighbourhood radius of the density test.
-    pub radius: f64,
-    /// Candidates with fewer background neighbours than this within `radius` are pruned.
-    pub min_neighbours: usize,
-}
-
-/// Which background Gaussians to prune (true = prune).
-pub fn prune_mask(background: &[[f32; 3]], patch: &[[f32; 3]], cfg: &PruneConfig) -> Vec<bool> {
-    if patch.is_empty() || background.is_empty() {
-        return vec![false; background.len()];
-    }
-    let mut patch_tree: KdTree<f64, 3> = KdTree::new();
-    for (i, p) in patch.iter().enumerate() {
-        patch_tree.add(&p.map(|v| v as f64), i as u64);
-    }
-    let mut bg_tree: KdTree<f64, 3> = KdTree::new();
-    for (i, p) in background.iter().enumerate() {
-        bg_tree.add(&p.map(|v| v as f64), i as u64);
-    }
-    background
-        .iter()
-        .map(|p| {
-            let q = p.map(|v| v as f64);
-            let nearest = patch_tree.nearest_one::<SquaredEuclidean>(&q);
-            if nearest.distance > cfg.near * cfg.near {
-                return false;
-            }
-            // within_unsorted counts the Gaussian itself
-            let neighbours = bg_tree.within_unsorted::<SquaredEuclidean>(&q, cfg.radius * cfg.radius).len() - 1;
-            neighbours < cfg.min_neighbours
-        })
-        .collect()
 }
 
 /// The Gaussian-Grouping-style fill used as a baseline: one new Gaussian at each removed

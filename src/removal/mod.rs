@@ -21,6 +21,7 @@ pub mod select;
 pub mod complete;
 pub mod consensus;
 pub mod fuse;
+pub mod prune;
 pub mod refine;
 
 pub use fuse::Fill;
@@ -32,7 +33,8 @@ use anyhow::{bail, Result};
 use complete::source_views::SourceView;
 use complete::{Completed, Completer, ViewInputs};
 use consensus::ConsensusView;
-use fuse::{FuseConfig, FuseView, PruneSettings};
+use fuse::{FuseConfig, FuseView};
+use prune::PruneSettings;
 use refine::{RefineConfig, RefineReport};
 use select::{HoleConfig, MaskedView, ViewRenderer};
 use std::time::Instant;
