@@ -3,10 +3,10 @@
 //!
 //!   cargo bench --bench sort [-- --sizes 1000000,4000000,16000000 --runs 3 --shape ballot|lanes]
 //!
-//! The sort runs in the shape the device gets (render::sort::SortShape::for_device) unless
+//! The sort runs in the shape the device gets (sort::SortShape::for_device) unless
 //! `--shape` names one; results of a named shape go to sort-<device>-<shape>.json.
 //!
-//! The roofline: the bytes the sort must move (render::sort::RadixSort::bytes_moved) over the device's compute
+//! The roofline: the bytes the sort must move (sort::RadixSort::bytes_moved) over the device's compute
 //! copy bandwidth is the fastest any sort with these passes could run here; the table shows the
 //! sort's share of that and the ratio to `sort_unstable` a sort at the roof would reach.
 //!
@@ -16,8 +16,8 @@
 mod common;
 
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
-use cogeo::render::sort::{RadixSort, SortShape};
 use cogeo::rng::Rng;
+use cogeo::sort::{RadixSort, SortShape};
 use std::time::Instant;
 
 fn main() {

@@ -154,8 +154,8 @@ fn rectified_fill_continues_a_receding_checkerboard_in_phase() {
     // a camera looking down at a checkerboard floor: in the image the squares shrink towards the
     // horizon, so image-space translations copy them with the wrong period; synthesized in the
     // floor's own frame the hole gets the squares the exact ground truth has
+    use cogeo::planes::Plane;
     use cogeo::removal::complete::rectify::Intrinsics;
-    use cogeo::removal::complete::surfaces::Plane;
     let gpu = common::gpu();
     let k = Intrinsics { fx: 80.0, fy: 80.0, cx: 48.0, cy: 36.0 };
     // the floor q . X = 1 in camera space (horizon at row 21); squares of 0.4 in (x, z)

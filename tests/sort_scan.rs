@@ -4,9 +4,9 @@
 mod common;
 
 use cogeo::gpu::{Buffer, MemoryKind, Recorder};
-use cogeo::render::scan::{PrefixScan, ScanShape};
-use cogeo::render::sort::{RadixSort, SortShape, LANE_SERIAL_MAX_LANES};
 use cogeo::rng::Rng;
+use cogeo::sort::scan::{PrefixScan, ScanShape};
+use cogeo::sort::{RadixSort, SortShape, LANE_SERIAL_MAX_LANES};
 use common::gpu;
 
 /// Sorts (key, index) pairs on the GPU and checks against Rust's stable sort.

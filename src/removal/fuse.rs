@@ -19,7 +19,8 @@
 //! Pruning of sparse background outliers near the patch is in prune.rs.
 
 use super::prune::{prune_mask, PruneSettings};
-use crate::removal::complete::{depth, surfaces::local_plane};
+use crate::planes::local_plane;
+use crate::removal::complete::depth;
 use crate::scene::{Camera, GaussianScene, SH_C0};
 use kiddo::{KdTree, SquaredEuclidean};
 use std::collections::HashMap;
@@ -263,7 +264,7 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
 const PLANE_RADIUS: usize = 3;
 
 /// The world-space steps across sample (x, y) of view `v`, one pixel wide in x and in y (times
-/// `stride`), on the plane fitted to the completed depth around it (`surfaces::local_plane`,
+/// `stride`), on the plane fitted to the completed depth around it (`planes::local_plane`,
 /// robust to a depth edge in its window): the sample's footprint on the surface. The neighbours'
 /// own depths scatter by a percent or two, which on a floor seen at a grazing angle is the whole
 /// depth difference between rows: differences of them tilted a quarter of the bench's floor

@@ -7,17 +7,15 @@ pub mod backward;
 mod features;
 pub mod params;
 pub mod reference;
-pub mod scan;
 pub(crate) mod specialized;
-pub mod sort;
 
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Recorder};
 use crate::scene::{Camera, GaussianScene, MAX_SH_DEGREE};
 use crate::shaders;
+use crate::sort::{self, scan, RadixSort};
 use anyhow::{bail, Result};
 use features::FeaturePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
-use sort::RadixSort;
 use specialized::SpecializedPipelines;
 
 pub const TILE: u32 = 16;
@@ -573,7 +571,7 @@ mod moved {
     /// A stable radix sort of `count` (key, value) pairs by `bits` bits: per 8-bit pass the count
     /// reads the keys, the scatter reads the pairs and writes them.
     pub fn sort(count: u32, bits: u32) -> u64 {
-        count as u64 * (4 + 8 + 8) * super::sort::passes_for_bits(bits) as u64
+        count as u64 * (4 + 8 + 8) * crate::sort::passes_for_bits(bits) as u64
     }
 
     /// Per Gaussian its index, touched count, offset, 2D mean, conic and tile rectangle in; per

@@ -19,9 +19,10 @@
 //! field is updated Jacobi-style.
 
 use super::rectify::{rectify, Intrinsics, PlaneFrame};
-use super::surfaces::{self, fill_by_surface, Plane};
+use super::surfaces::{self, fill_by_surface};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
 use crate::image_ops::{bounding_box, crop};
+use crate::planes::Plane;
 use crate::rng::Rng;
 use crate::shaders;
 use anyhow::Result;

@@ -30,6 +30,7 @@ pub mod surfaces;
 pub mod transfer;
 
 use crate::gpu::Gpu;
+use crate::planes::Plane;
 use crate::scene::Camera;
 use anyhow::Result;
 use depth::{DepthContract, DepthPrior, DepthView, PriorSpace};
@@ -39,7 +40,6 @@ use photo_depth::{correct_hole_depth, DepthScale};
 use rectify::Intrinsics;
 use source_views::SourceView;
 use std::path::PathBuf;
-use surfaces::Plane;
 use transfer::{transfer, Transfer};
 
 /// How far (relative) a view's original depth may be from a point's for that view to count as

@@ -6,8 +6,8 @@
 //! translation is the right match. The exemplar synthesizes there and the result is sampled back
 //! through the same homography.
 
-use super::surfaces::Plane;
 use crate::image_ops::sample_bilinear;
+use crate::planes::Plane;
 use crate::scene::Camera;
 use glam::{DVec2, DVec3};
 

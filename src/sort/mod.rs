@@ -8,11 +8,13 @@
 //! radix_scatter_lanes.comp): each lane owns a contiguous slice of the block and its own digit
 //! counters, so a key costs a few plain loads and stores rather than RADIX_BITS ballots.
 
-use super::scan::PrefixScan;
+pub mod scan;
+
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
 use crate::shaders;
 use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
+use scan::PrefixScan;
 
 pub const RADIX_BITS: u32 = 8;
 /// The widest workgroup the lane-serial shape has counter rows for (MAX_LANES in radix_lanes.glsl).

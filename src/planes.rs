@@ -1,0 +1,196 @@
+//! Planes in inverse depth over the image: the surface model that completion (the depth prior,
+//! the exemplar's surfaces, rectification) and fusion (each patch Gaussian's orientation) share.
+//! In a pinhole view the inverse depth of a plane is affine in pixel coordinates, so a plane is
+//! three numbers fitted to (x, y, 1/d) with no intrinsics needed: by least squares, robustly
+//! around one pixel (`local_plane`), or several at once by sequential RANSAC (`fit_planes`).
+
+use crate::rng::Rng;
+
+/// A plane as its inverse depth over the image: disparity = a x + b y + c at pixel center (x, y).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+}
+
+impl Plane {
+    pub fn disparity(&self, x: f64, y: f64) -> f64 {
+        self.a * x + self.b * y + self.c
+    }
+
+    /// Relative disparity residual of pixel `i` (of a w-wide image) with disparity `d`.
+    pub fn residual(&self, i: usize, w: usize, d: f64) -> f64 {
+        let (x, y) = center(i, w);
+        (self.disparity(x, y) - d).abs() / d
+    }
+
+    /// Tukey's biweight of pixel `i` with disparity `d` for a robust refit of this plane: the
+    /// relative residual on the scale of PLANE_TOLERANCE, 0 beyond it.
+    pub fn tukey_weight(&self, i: usize, w: usize, d: f64) -> f64 {
+        let r = self.residual(i, w, d) / PLANE_TOLERANCE;
+        if r < 1.0 {
+            (1.0 - r * r).powi(2)
+        } else {
+            0.0
+        }
+    }
+}
+
+pub fn center(i: usize, w: usize) -> (f64, f64) {
+    ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5)
+}
+
+/// Relative disparity tolerance of plane membership (trained scenes render depth with a few
+/// percent of noise).
+pub const PLANE_TOLERANCE: f64 = 0.03;
+const RANSAC_TRIALS: usize = 256;
+
+/// Solves the 3x3 system m z = r (Gaussian elimination with partial pivoting); None if singular.
+pub fn solve3(mut m: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
+    let scale = m.iter().flatten().fold(0f64, |s, v| s.max(v.abs()));
+    if scale == 0.0 {
+        return None;
+    }
+    for col in 0..3 {
+        let p = (col..3).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
+        if m[p][col].abs() < 1e-12 * scale {
+            return None;
+        }
+        m.swap(col, p);
+        r.swap(col, p);
+        for row in col + 1..3 {
+            let f = m[row][col] / m[col][col];
+            for k in col..3 {
+                m[row][k] -= f * m[col][k];
+            }
+            r[row] -= f * r[col];
+        }
+    }
+    let mut z = [0f64; 3];
+    for row in (0..3).rev() {
+        let s: f64 = (row + 1..3).map(|k| m[row][k] * z[k]).sum();
+        z[row] = (r[row] - s) / m[row][row];
+    }
+    Some(z)
+}
+
+/// Least-squares plane through the pixels `idx`, each weighted by `weight` (centered coordinates
+/// for conditioning).
+pub fn least_squares(idx: &[usize], disp: &[f32], w: usize, weight: impl Fn(usize) -> f64) -> Option<Plane> {
+    let n: f64 = idx.iter().map(|&i| weight(i)).sum();
+    if idx.len() < 3 || n <= 0.0 {
+        return None;
+    }
+    let (mx, my) = idx.iter().fold((0.0, 0.0), |(sx, sy), &i| {
+        let (x, y) = center(i, w);
+        (sx + weight(i) * x / n, sy + weight(i) * y / n)
+    });
+    let mut m = [[0f64; 3]; 3];
+    let mut r = [0f64; 3];
+    for &i in idx {
+        let (x, y) = center(i, w);
+        let (row, k) = ([x - mx, y - my, 1.0], weight(i));
+        for j in 0..3 {
+            for l in 0..3 {
+                m[j][l] += k * row[j] * row[l];
+            }
+            r[j] += k * row[j] * disp[i] as f64;
+        }
+    }
+    let [a, b, c] = solve3(m, r)?;
+    Some(Plane { a, b, c: c - a * mx - b * my })
+}
+
+/// The plane of the surface at pixel (x, y): a robust fit of the disparity in the window of
+/// `radius` around it. It starts from the pixels within 10 % of the center's disparity (a depth
+/// edge in the window does not pull it) and is refitted three times with Tukey weights on the
+/// relative residual (scale `PLANE_TOLERANCE`). None with fewer than 6 pixels with a disparity or
+/// a degenerate window. Per-pixel depths scatter by a percent or two; the plane does not, so the
+/// surface's orientation comes from it.
+pub fn local_plane(disp: &[f32], w: usize, h: usize, x: usize, y: usize, radius: usize) -> Option<Plane> {
+    let valid = |i: usize| disp[i] > 0.0 && disp[i].is_finite();
+    let center_disp = disp[y * w + x] as f64;
+    if !valid(y * w + x) {
+        return None;
+    }
+    let idx: Vec<usize> = (y.saturating_sub(radius)..(y + radius + 1).min(h))
+        .flat_map(|yy| (x.saturating_sub(radius)..(x + radius + 1).min(w)).map(move |xx| yy * w + xx))
+        .filter(|&i| valid(i))
+        .collect();
+    if idx.len() < 6 {
+        return None;
+    }
+    let near = |i: usize| (((disp[i] as f64 - center_disp).abs() / center_disp) < 0.1) as u8 as f64;
+    let mut plane = least_squares(&idx, disp, w, near)?;
+    for _ in 0..3 {
+        plane = least_squares(&idx, disp, w, |i| plane.tukey_weight(i, w, disp[i] as f64))?;
+    }
+    Some(plane)
+}
+
+/// Sequential RANSAC: up to `max_planes` planes, each supported by at least `min_inliers` of the
+/// pixels where `sample` holds (disparity `disp`, relative tolerance `tol`); each plane is refitted
+/// by least squares on the core of its inliers, which are then taken out for the next one.
+/// Deterministic.
+pub fn fit_planes(
+    disp: &[f32],
+    sample: &[bool],
+    w: usize,
+    tol: f64,
+    max_planes: usize,
+    min_inliers: usize,
+    seed: u64,
+) -> Vec<Plane> {
+    let mut pts: Vec<usize> = (0..disp.len()).filter(|&i| sample[i] && disp[i] > 0.0 && disp[i].is_finite()).collect();
+    let mut rng = Rng::new(seed);
+    let mut planes = Vec::new();
+    let inliers = |p: &Plane, pts: &[usize]| -> Vec<usize> {
+        pts.iter().copied().filter(|&i| p.residual(i, w, disp[i] as f64) <= tol).collect()
+    };
+    while planes.len() < max_planes && pts.len() >= min_inliers.max(3) {
+        let mut best: Option<(usize, Plane)> = None;
+        for _ in 0..RANSAC_TRIALS {
+            let pick = [rng.below(pts.len()), rng.below(pts.len()), rng.below(pts.len())];
+            if pick[0] == pick[1] || pick[1] == pick[2] || pick[0] == pick[2] {
+                continue;
+            }
+            let mut m = [[0f64; 3]; 3];
+            let mut r = [0f64; 3];
+            for (row, &k) in pick.iter().enumerate() {
+                let (x, y) = center(pts[k], w);
+                m[row] = [x, y, 1.0];
+                r[row] = disp[pts[k]] as f64;
+            }
+            let Some([a, b, c]) = solve3(m, r) else { continue };
+            let p = Plane { a, b, c };
+            let n = pts.iter().filter(|&&i| p.residual(i, w, disp[i] as f64) <= tol).count();
+            if best.as_ref().is_none_or(|(bn, _)| n > *bn) {
+                best = Some((n, p));
+            }
+        }
+        let Some((n, p)) = best else { break };
+        if n < min_inliers {
+            break;
+        }
+        // refit by least squares on the core of the inliers (residual within 3x their median):
+        // points of a neighbouring plane near the crease lie within the tolerance too and would
+        // tilt the fit
+        let mut p = p;
+        for _ in 0..4 {
+            let inl = inliers(&p, &pts);
+            let mut rs: Vec<f64> = inl.iter().map(|&i| p.residual(i, w, disp[i] as f64)).collect();
+            rs.sort_by(|a, b| a.total_cmp(b));
+            let cut = (3.0 * rs[rs.len() / 2]).max(1e-7);
+            let core: Vec<usize> = inl.into_iter().filter(|&i| p.residual(i, w, disp[i] as f64) <= cut).collect();
+            p = least_squares(&core, disp, w, |_| 1.0).unwrap_or(p);
+        }
+        let own = inliers(&p, &pts);
+        if own.len() < min_inliers {
+            break;
+        }
+        planes.push(p);
+        pts.retain(|&i| p.residual(i, w, disp[i] as f64) > tol);
+    }
+    planes
+}
