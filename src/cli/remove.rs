@@ -165,8 +165,8 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         }
     }
     let test_cams: Vec<Camera> = data.test.iter().map(|v| v.camera.clone()).collect();
-    let test_before = cogeo::removal::render_rgb(&gpu, &scene, &test_cams, opts.background)?;
-    let test_after = cogeo::removal::render_rgb(&gpu, &removal.scene, &test_cams, opts.background)?;
+    let test_before = cogeo::render::render_rgb(&gpu, &scene, &test_cams, opts.background)?;
+    let test_after = cogeo::render::render_rgb(&gpu, &removal.scene, &test_cams, opts.background)?;
     write_views(&out.join("test_before"), &test_cams, &test_before)?;
     write_views(&out.join("test_after"), &test_cams, &test_after)?;
     // synth ground truth is stored at the dataset's resolution; a downscaled run is not scored

@@ -6,7 +6,7 @@ use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use cogeo::gpu::Gpu;
 use cogeo::io::{write_exr, write_png_gray, write_png_rgb};
-use cogeo::render::{Rasterizer, RenderSettings, SceneBuffers};
+use cogeo::render::{RenderSettings, SceneRenderer};
 use cogeo::scene::camera::resize_cameras;
 use cogeo::scene::{camera, colmap, ply, Camera, GaussianScene};
 use std::path::{Path, PathBuf};
@@ -85,11 +85,10 @@ fn render_views(
     } else {
         None
     };
-    let buffers = SceneBuffers::upload(gpu, scene, features.as_ref().map(|(f, d)| (f.as_slice(), *d)))?;
-    let mut raster = Rasterizer::new(gpu)?;
+    let mut renderer = SceneRenderer::new(gpu, scene, features.as_ref().map(|(f, d)| (f.as_slice(), *d)))?;
     let bar = progress(cameras.len(), "render");
     for cam in cameras {
-        let r = raster.render(&buffers, cam, settings)?;
+        let r = renderer.render(cam, settings)?;
         write_png_rgb(&out.join(format!("{}.png", cam.name)), r.width, r.height, &r.rgb)?;
         if alpha {
             write_png_gray(&out.join(format!("{}_alpha.png", cam.name)), r.width, r.height, &r.alpha)?;

@@ -25,7 +25,7 @@ pub mod prune;
 pub mod refine;
 
 pub use fuse::Fill;
-pub use select::{hole_mask, render_rgb, select};
+pub use select::{hole_mask, select};
 
 use crate::gpu::Gpu;
 use crate::scene::{Camera, GaussianScene};

@@ -14,7 +14,7 @@
 
 use crate::gpu::Gpu;
 use crate::image_ops::dilate;
-use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
+use crate::render::{RenderSettings, SceneRenderer};
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
 
@@ -52,8 +52,7 @@ pub fn select_gaussians(scene: &GaussianScene, labels: &[u8], chosen: &[u8]) -> 
 
 /// Renders RGB, alpha, expected depth and (with `marked`) the marked Gaussians' weight.
 pub struct ViewRenderer {
-    raster: Rasterizer,
-    buffers: SceneBuffers,
+    renderer: SceneRenderer,
     features: bool,
 }
 
@@ -69,13 +68,13 @@ pub struct Rendered {
 impl ViewRenderer {
     pub fn new(gpu: &Gpu, scene: &GaussianScene, marked: Option<&[bool]>) -> Result<ViewRenderer> {
         let feature: Option<Vec<f32>> = marked.map(|r| r.iter().map(|&x| x as u8 as f32).collect());
-        let buffers = SceneBuffers::upload(gpu, scene, feature.as_deref().map(|f| (f, 1)))?;
-        Ok(ViewRenderer { raster: Rasterizer::new(gpu)?, buffers, features: marked.is_some() })
+        let renderer = SceneRenderer::new(gpu, scene, feature.as_deref().map(|f| (f, 1)))?;
+        Ok(ViewRenderer { renderer, features: marked.is_some() })
     }
 
     pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
         let settings = RenderSettings { background, features: self.features, ..Default::default() };
-        let o = self.raster.render(&self.buffers, camera, &settings)?;
+        let o = self.renderer.render(camera, &settings)?;
         Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight: o.features })
     }
 }
@@ -169,10 +168,4 @@ pub fn hole_masks(
         progress(i + 1, cameras.len());
     }
     Ok(views)
-}
-
-/// Renders `scene` from `cameras` (planar RGB each).
-pub fn render_rgb(gpu: &Gpu, scene: &GaussianScene, cameras: &[Camera], background: [f32; 3]) -> Result<Vec<Vec<f32>>> {
-    let mut r = ViewRenderer::new(gpu, scene, None)?;
-    cameras.iter().map(|c| Ok(r.render(c, background)?.rgb)).collect()
 }

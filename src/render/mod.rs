@@ -7,6 +7,7 @@ pub mod backward;
 mod features;
 pub mod params;
 pub mod reference;
+mod scene_renderer;
 pub(crate) mod specialized;
 
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Recorder};
@@ -16,6 +17,7 @@ use crate::sort::{self, scan, RadixSort};
 use anyhow::{bail, Result};
 use features::FeaturePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
+pub use scene_renderer::{render_rgb, SceneRenderer};
 use specialized::SpecializedPipelines;
 
 pub const TILE: u32 = 16;

@@ -14,7 +14,7 @@ pub mod prompt;
 
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
-use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
+use crate::render::{Rasterizer, RenderSettings, SceneBuffers, SceneRenderer};
 use crate::scene::{Camera, ExtraProperty, GaussianScene, PlyType};
 use anyhow::{bail, Result};
 use labels::{LabelMaps, IGNORE};
@@ -150,8 +150,7 @@ pub fn project_labels(scene: &GaussianScene, cameras: &[Camera], labels: &LabelM
 /// pixel takes the label of largest weight, the uncovered remainder (final transmittance) counting
 /// as background.
 pub struct LabelRenderer {
-    raster: Rasterizer,
-    buffers: SceneBuffers,
+    renderer: SceneRenderer,
     classes: usize,
 }
 
@@ -165,13 +164,12 @@ impl LabelRenderer {
         for (i, &l) in labels.iter().enumerate() {
             features[i * classes + l as usize] = 1.0;
         }
-        let buffers = SceneBuffers::upload(gpu, scene, Some((&features, classes)))?;
-        Ok(LabelRenderer { raster: Rasterizer::new(gpu)?, buffers, classes })
+        Ok(LabelRenderer { renderer: SceneRenderer::new(gpu, scene, Some((&features, classes)))?, classes })
     }
 
     pub fn render(&mut self, camera: &Camera) -> Result<Vec<u8>> {
         let settings = RenderSettings { features: true, sh_degree: Some(0), ..Default::default() };
-        let out = self.raster.render(&self.buffers, camera, &settings)?;
+        let out = self.renderer.render(camera, &settings)?;
         let hw = (out.width * out.height) as usize;
         Ok((0..hw)
             .map(|u| {

@@ -1,0 +1,31 @@
+//! "Render these cameras": a scene uploaded once (with optional per-Gaussian features) and
+//! rendered from any number of cameras. Every caller that only renders, without a backward pass,
+//! goes through it: `cogeo render`, the removal's views, label maps, held-out renders.
+
+use super::{Rasterizer, RenderOutput, RenderSettings, SceneBuffers};
+use crate::gpu::Gpu;
+use crate::scene::{Camera, GaussianScene};
+use anyhow::Result;
+
+pub struct SceneRenderer {
+    raster: Rasterizer,
+    buffers: SceneBuffers,
+}
+
+impl SceneRenderer {
+    /// Uploads `scene`, with `features` (n x dim, row-major) when given.
+    pub fn new(gpu: &Gpu, scene: &GaussianScene, features: Option<(&[f32], usize)>) -> Result<SceneRenderer> {
+        Ok(SceneRenderer { buffers: SceneBuffers::upload(gpu, scene, features)?, raster: Rasterizer::new(gpu)? })
+    }
+
+    pub fn render(&mut self, camera: &Camera, settings: &RenderSettings) -> Result<RenderOutput> {
+        self.raster.render(&self.buffers, camera, settings)
+    }
+}
+
+/// Planar RGB of `scene` from each of `cameras` over `background`.
+pub fn render_rgb(gpu: &Gpu, scene: &GaussianScene, cameras: &[Camera], background: [f32; 3]) -> Result<Vec<Vec<f32>>> {
+    let mut renderer = SceneRenderer::new(gpu, scene, None)?;
+    let settings = RenderSettings { background, ..Default::default() };
+    cameras.iter().map(|c| Ok(renderer.render(c, &settings)?.rgb)).collect()
+}
