@@ -6,6 +6,8 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use cogeo::io::{write_exr, write_png_rgb};
 use cogeo::removal::complete::Completer;
+use cogeo::removal::held_out::{render_held_out, score_against_synth, GroundTruthScores};
+use cogeo::removal::report::RemovalReport;
 use cogeo::scene::{ply, Camera};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -75,6 +77,19 @@ pub fn chosen_labels(flags: &RemovalFlags, scene_path: &Path) -> Result<Vec<u8>>
     labels.sort();
     labels.dedup();
     Ok(labels)
+}
+
+/// report.json: the removal's own report with what the command adds.
+#[derive(serde::Serialize)]
+struct RemoveReport<'a> {
+    #[serde(flatten)]
+    removal: &'a RemovalReport,
+    scene: &'a Path,
+    device: String,
+    total_seconds: f64,
+    peak_rss_mib: Option<f64>,
+    #[serde(flatten)]
+    scores: &'a GroundTruthScores,
 }
 
 pub fn write_views(dir: &Path, cameras: &[Camera], images: &[Vec<f32>]) -> Result<()> {
@@ -165,40 +180,32 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         }
     }
     let test_cams: Vec<Camera> = data.test.iter().map(|v| v.camera.clone()).collect();
-    let test_before = cogeo::render::render_rgb(&gpu, &scene, &test_cams, opts.background)?;
-    let test_after = cogeo::render::render_rgb(&gpu, &removal.scene, &test_cams, opts.background)?;
-    write_views(&out.join("test_before"), &test_cams, &test_before)?;
-    write_views(&out.join("test_after"), &test_cams, &test_after)?;
+    let held_out = render_held_out(&gpu, &scene, &removal.scene, &test_cams, opts.background)?;
+    write_views(&out.join("test_before"), &test_cams, &held_out.before)?;
+    write_views(&out.join("test_after"), &test_cams, &held_out.after)?;
     // synth ground truth is stored at the dataset's resolution; a downscaled run is not scored
-    let (synth, depth_error) = if a.scale.downscale == 1 {
-        let synth = cogeo::eval::synth_metrics(&a.data, &test_cams, &test_after, &labels)?;
-        let depth_error = cogeo::eval::synth_depth_error(
-            &a.data,
-            &labels,
-            &cameras,
-            &v.iter().map(|x| x.depth.clone()).collect::<Vec<_>>(),
-            &v.iter().map(|x| x.fill.clone()).collect::<Vec<_>>(),
-        )?;
-        (synth, depth_error)
+    let scores = if a.scale.downscale == 1 {
+        score_against_synth(&a.data, &labels, &test_cams, &held_out, &cameras, v)?
     } else {
-        (None, None)
+        GroundTruthScores::default()
     };
     ply::write_ply(&removal.scene, &out.join("scene.ply"))?;
-    let mut report = removal.report;
-    report["scene"] = serde_json::json!(a.scene);
-    report["device"] = serde_json::json!(gpu.info().name);
-    report["total_seconds"] = serde_json::json!(start.elapsed().as_secs_f64());
-    report["peak_rss_mib"] = serde_json::json!(cogeo::io::peak_rss_mib());
-    report["held_out_vs_ground_truth"] = serde_json::json!(synth);
-    report["fill_depth_vs_ground_truth"] =
-        serde_json::json!(depth_error.map(|(rel, rmse)| serde_json::json!({"abs_rel": rel, "rmse": rmse})));
+    let report = RemoveReport {
+        removal: &removal.report,
+        scene: &a.scene,
+        device: gpu.info().name.clone(),
+        total_seconds: start.elapsed().as_secs_f64(),
+        peak_rss_mib: cogeo::io::peak_rss_mib(),
+        scores: &scores,
+    };
     cogeo::io::write_atomic(&out.join("report.json"), |w| {
         serde_json::to_writer_pretty(&mut *w, &report)?;
         Ok(())
     })?;
     batch.commit()?;
-    let bg = report["background_psnr_vs_original"]["mean"].as_f64().unwrap_or(f64::NAN);
-    let gt = synth
+    let bg = removal.report.background_psnr_vs_original.mean;
+    let gt = scores
+        .held_out_vs_ground_truth
         .map(|m| format!("; held-out masked PSNR vs ground truth {:.2} dB (SSIM {:.3})", m.masked_psnr, m.masked_ssim))
         .unwrap_or_default();
     eprintln!(

@@ -10,19 +10,27 @@
 //!    the captured photos agree (complete/photo_depth.rs), and colors of hole pixels that other
 //!    views saw come from those views' captured images (complete/transfer.rs), which also
 //!    corrects covered but poorly rendered ones; only the rest of the fill stays invented.
-//! 4. Fusion and pruning (fuse.rs): completed depth back-projected into new Gaussians; sparse
-//!    background outliers near them pruned.
+//! 4. Fusion and pruning (fuse.rs, prune.rs): completed depth back-projected into new Gaussians;
+//!    sparse background outliers near them pruned. Then (consensus.rs) which invented pixels each
+//!    view's refinement keeps.
 //! 5. Refinement (refine.rs): color first, then trust-region clipped geometry; each view's hole
 //!    weighs more in the loss than the rest of it, whose target is the scene's own render.
 //!
-//! Each stage takes and returns plain data; each can be switched off for ablations (`Stages`).
+//! Each stage is a function over the edited views (`view::EditedView`: a view's renders, hole,
+//! completion, transferred pixels and loss weights, and its line of the report), and the report
+//! is a typed struct (report.rs). Each stage can be switched off for ablations (`Stages`).
+//! After a removal, held_out.rs renders the held-out views and scores them against synth ground
+//! truth.
 
 pub mod select;
 pub mod complete;
 pub mod consensus;
 pub mod fuse;
 pub mod prune;
+pub mod held_out;
 pub mod refine;
+pub mod report;
+pub mod view;
 
 pub use fuse::Fill;
 pub use select::{hole_mask, select};
@@ -30,14 +38,14 @@ pub use select::{hole_mask, select};
 use crate::gpu::Gpu;
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
-use complete::source_views::SourceView;
 use complete::{Completed, Completer, ViewInputs};
 use consensus::ConsensusView;
-use fuse::{FuseConfig, FuseView};
+use fuse::{FuseConfig, FuseView, Patched};
 use prune::PruneSettings;
 use refine::{RefineConfig, RefineReport};
-use select::{HoleConfig, MaskedView, ViewRenderer};
-use std::time::Instant;
+use report::{BackgroundPsnr, CompletionSummary, GaussianCounts, RemovalReport, StageClock};
+use select::{HoleConfig, Selection, ViewRenderer};
+use view::EditedView;
 
 /// Which stages run (each can be switched off for ablations).
 #[derive(Clone, Debug, serde::Serialize, clap::Args)]
@@ -134,27 +142,11 @@ pub struct ViewResult {
 pub struct Removal {
     pub scene: GaussianScene,
     pub views: Vec<ViewResult>,
-    pub report: serde_json::Value,
+    pub report: RemovalReport,
 }
 
 /// Progress callback: (stage, done, total).
 pub type Progress<'a> = &'a mut dyn FnMut(&str, usize, usize);
-
-/// Seconds per stage, for the report.
-struct StageClock {
-    clock: Instant,
-    seconds: serde_json::Map<String, serde_json::Value>,
-}
-
-impl StageClock {
-    fn start() -> StageClock {
-        StageClock { clock: Instant::now(), seconds: serde_json::Map::new() }
-    }
-    fn lap(&mut self, stage: &str) {
-        self.seconds.insert(stage.into(), self.clock.elapsed().as_secs_f64().into());
-        self.clock = Instant::now();
-    }
-}
 
 /// Runs the pipeline on `scene` (tagged: `labels` per Gaussian) with the edited `cameras` and
 /// their captured images `photos` (planar RGB; empty: no color transfer).
@@ -182,124 +174,64 @@ pub fn remove(
         keep_alpha: opts.keep_alpha,
         background: opts.background,
     };
-    let mut masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
+    let masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
     clock.lap("masks");
-    let mut result = selection.background; // moved: only the removed mask and count are used below
-    let mut completed: Vec<Completed> = Vec::new();
-    // per view, the hole pixels that took a photo's color (stage 3c)
-    let mut transferred: Vec<Vec<bool>> = Vec::new();
-    let mut per_view = Vec::new();
-    let (mut fusion, mut pruned, mut prune_used) = (None, 0, None);
-    let mut refine_report: Option<RefineReport> = None;
+    let mut views: Vec<EditedView> = masked
+        .into_iter()
+        .enumerate()
+        .map(|(i, m)| EditedView::new(&cameras[i], photos.get(i).map(|p| p.as_slice()), m))
+        .collect();
+    let Selection { removed, count: removed_count, background, .. } = selection;
+    let mut result = background;
+    let (mut fusion, mut prune_used, mut pruned) = (None, None, 0);
+    let mut refine_report = None;
     if opts.stages.complete {
         // 3. completion
-        let inputs: Vec<ViewInputs> = masked.iter().zip(cameras).map(|(m, c)| completion_inputs(m, c)).collect();
-        completed = completer.complete_views(&inputs, &mut |d, t| progress("complete", d, t))?;
-        drop(inputs);
-        let mut through = Vec::new();
-        for (m, k) in masked.iter_mut().zip(&completed) {
-            // with the covered pixels that looked through a gap
-            through.push(k.fill.iter().filter(|&&f| f).count() - m.fill.iter().filter(|&&f| f).count());
-            m.fill.clone_from(&k.fill);
-        }
-        per_view = masked.iter().zip(cameras).zip(&completed).map(|((m, c), k)| view_report(&c.name, m, k)).collect();
-        for (r, n) in per_view.iter_mut().zip(through) {
-            r["see_through_pixels"] = n.into();
-        }
+        complete_views(&mut views, completer, progress)?;
         clock.lap("complete");
         // 3b. the hole depth the captured photos agree on, then 3c. colors from the views that
         // saw the completed surface
         if !photos.is_empty() {
-            let sources = transfer_sources(&masked, cameras, photos);
-            let holes: Vec<&[bool]> = masked.iter().map(|m| m.hole.as_slice()).collect();
             if completer.photo_depth {
-                let scales = completer.correct_depths(cameras, &sources, &holes, &mut completed);
-                for (r, scale) in per_view.iter_mut().zip(scales) {
-                    r["hole_depth_scale"] = serde_json::to_value(scale)?;
-                }
+                correct_depths(&mut views, completer);
                 clock.lap("photo_depth");
             }
             if opts.stages.transfer {
-                let fills: Vec<&[bool]> = masked.iter().map(|m| m.fill.as_slice()).collect();
-                transferred = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
-                for (r, t) in per_view.iter_mut().zip(&transferred) {
-                    r["transferred_pixels"] = t.iter().filter(|&&f| f).count().into();
-                }
+                transfer_colors(&mut views, completer)?;
                 clock.lap("transfer");
             }
         }
         // 4. fusion and pruning (or the nearest-copy baseline)
-        let patch_pixels: Vec<Vec<bool>> =
-            masked.iter().zip(&completed).map(|(m, k)| m.patch_pixels(&k.depth, opts.keep_alpha)).collect();
-        for ((r, m), p) in per_view.iter_mut().zip(&masked).zip(&patch_pixels) {
-            r["fill_pixels_without_patch"] =
-                (m.fill.iter().filter(|&&f| f).count() - p.iter().filter(|&&f| f).count()).into();
-        }
-        let fviews: Vec<FuseView> = completed
-            .iter()
-            .zip(&patch_pixels)
-            .zip(cameras)
-            .map(|((k, fill), camera)| FuseView { camera, rgb: &k.rgb, depth: &k.depth, fill })
-            .collect();
-        let removed_means: Vec<[f32; 3]> =
-            scene.means.iter().zip(&selection.removed).filter(|(_, &r)| r).map(|(m, _)| *m).collect();
-        let (fill, prune) = (opts.fill, opts.stages.prune);
-        let patch = fuse::patch_scene(result, fill, &fviews, &removed_means, &opts.fuse, prune, &opts.prune)?;
+        let patch = fuse_patch(&mut views, scene, &removed, result, opts)?;
         (result, fusion, pruned, prune_used) = (patch.scene, Some(patch.report), patch.pruned, patch.prune);
         clock.lap("fuse");
-        // 4b. which invented pixels each view's refinement keeps
-        let consensus_weights = if opts.stages.refine && !patch.owned.is_empty() {
-            let views: Vec<ConsensusView> = (0..completed.len())
-                .map(|i| ConsensusView {
-                    camera: &cameras[i],
-                    rgb: &completed[i].rgb,
-                    depth: &completed[i].depth,
-                    invented: (0..masked[i].fill.len())
-                        .map(|p| masked[i].fill[p] && !transferred.get(i).is_some_and(|t| t[p]))
-                        .collect(),
-                    owned: &patch.owned[i],
-                })
-                .collect();
-            let (masks, verdicts) = consensus::loss_masks(&views, opts.fuse.tolerance);
-            for (r, v) in per_view.iter_mut().zip(verdicts) {
-                r["consensus"] = serde_json::to_value(v)?;
-            }
-            Some(masks)
-        } else {
-            None
-        };
-        // 5. refinement, the holes weighing more than the rest of each view
         if opts.stages.refine {
-            let holes: Vec<&[bool]> = masked.iter().map(|m| m.hole.as_slice()).collect();
-            let masks = refine::loss_weights(&holes, consensus_weights, opts.refine.hole_weight);
-            let targets: Vec<Vec<f32>> = completed.iter().map(|k| k.rgb.clone()).collect();
-            let total = opts.refine.iters as usize;
-            let (refined, report) =
-                refine::refine(gpu, &result, cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
-                    progress("refine", it as usize, total)
-                })?;
-            result = refined;
-            refine_report = Some(report);
+            // 4b. which invented pixels each view's refinement keeps
+            if !patch.owned.is_empty() {
+                consensus_weights(&mut views, &patch.owned, opts.fuse.tolerance);
+            }
+            // 5. refinement, the holes weighing more than the rest of each view
+            let (refined, report) = refine_views(gpu, &result, &views, extent, opts, progress)?;
+            (result, refine_report) = (refined, Some(report));
             clock.lap("refine");
         }
     }
     // final renders and background preservation: PSNR outside the dilated hole vs the original
-    let (after, bg_psnr) = final_renders(gpu, &result, cameras, &masked, opts.background, progress)?;
+    let (after, bg_psnr) = final_renders(gpu, &result, &views, opts.background, progress)?;
     clock.lap("render");
-    let mean = |v: &[f64]| if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 };
-    let report = serde_json::json!({
-        "labels": opts.labels,
-        "options": opts,
-        "completion": completer_summary(completer, &opts.stages, !photos.is_empty()),
-        "gaussians": { "input": scene.len(), "removed": selection.count, "pruned": pruned, "output": result.len() },
-        "views": per_view,
-        "fusion": fusion,
-        "prune": prune_used,
-        "refine": refine_report,
-        "background_psnr_vs_original": { "mean": mean(&bg_psnr), "min": bg_psnr.iter().copied().fold(f64::INFINITY, f64::min) },
-        "seconds": clock.seconds,
-    });
-    let views = view_results(masked, cameras, completed, after);
+    let report = RemovalReport {
+        labels: opts.labels.clone(),
+        options: opts.clone(),
+        completion: opts.stages.complete.then(|| CompletionSummary::of(completer, !photos.is_empty())),
+        gaussians: GaussianCounts { input: scene.len(), removed: removed_count, pruned, output: result.len() },
+        views: if opts.stages.complete { views.iter().map(|v| v.report.clone()).collect() } else { Vec::new() },
+        fusion,
+        prune: prune_used,
+        refine: refine_report,
+        background_psnr_vs_original: BackgroundPsnr::of(&bg_psnr),
+        seconds: clock.seconds,
+    };
+    let views = views.into_iter().zip(after).map(|(v, after)| view_result(v, after)).collect();
     Ok(Removal { scene: result, views, report })
 }
 
@@ -327,83 +259,123 @@ fn check_inputs(
     Ok(())
 }
 
-/// The per-view images of the result: stage 2's renders and holes, the completion (when it ran)
-/// and the final renders.
-fn view_results(
-    masked: Vec<MaskedView>,
-    cameras: &[Camera],
-    completed: Vec<Completed>,
-    after: Vec<Vec<f32>>,
-) -> Vec<ViewResult> {
-    let mut completed = completed.into_iter();
-    masked
-        .into_iter()
-        .zip(cameras)
-        .zip(after)
-        .map(|((m, cam), after)| {
-            let (inpainted, depth) = match completed.next() {
-                Some(k) => (k.rgb, k.depth),
-                None => (m.after_removal.rgb.clone(), Vec::new()),
-            };
-            ViewResult {
-                name: cam.name.clone(),
-                before: m.before.rgb,
-                removed: m.after_removal.rgb,
-                inpainted,
-                depth,
-                after,
-                hole: m.hole,
-                fill: m.fill,
-            }
-        })
-        .collect()
+/// Stage 3 over every view.
+fn complete_views(views: &mut [EditedView], completer: &mut Completer, progress: Progress) -> Result<()> {
+    let inputs: Vec<ViewInputs> = views.iter().map(|v| v.completion_inputs()).collect();
+    let completed = completer.complete_views(&inputs, &mut |d, t| progress("complete", d, t))?;
+    drop(inputs);
+    for (v, k) in views.iter_mut().zip(completed) {
+        v.set_completed(k);
+    }
+    Ok(())
 }
 
-/// Every edited view as a source of captured colors: its photo, read off the objects' footprint
-/// where the original render (with the objects) is opaque at the right depth.
-fn transfer_sources<'a>(
-    masked: &'a [MaskedView],
-    cameras: &'a [Camera],
-    photos: &'a [Vec<f32>],
-) -> Vec<SourceView<'a>> {
-    masked
-        .iter()
-        .zip(cameras)
-        .zip(photos)
-        .map(|((m, camera), photo)| SourceView {
-            camera,
-            photo,
-            hole: &m.footprint,
-            depth: &m.before.depth,
-            alpha: &m.before.alpha,
-        })
-        .collect()
+/// The views' completions, taken out while the views lend their photos to each other.
+fn take_completions(views: &mut [EditedView]) -> Vec<Completed> {
+    views.iter_mut().map(|v| v.completed.take().expect("stage 3 ran")).collect()
 }
 
-/// What completion reads of one view after stage 2.
-fn completion_inputs<'a>(m: &'a MaskedView, camera: &Camera) -> ViewInputs<'a> {
-    ViewInputs {
-        width: camera.width as usize,
-        height: camera.height as usize,
-        intrinsics: complete::rectify::Intrinsics::from(camera),
-        rgb: &m.after_removal.rgb,
-        alpha: &m.after_removal.alpha,
-        expected_depth: &m.after_removal.depth,
-        fill: &m.fill,
-        hole: &m.hole,
+fn put_back(views: &mut [EditedView], completed: Vec<Completed>) {
+    for (v, k) in views.iter_mut().zip(completed) {
+        v.completed = Some(k);
     }
 }
 
-fn view_report(name: &str, m: &MaskedView, c: &Completed) -> serde_json::Value {
-    serde_json::json!({
-        "view": name,
-        "hole_pixels": m.hole.iter().filter(|&&x| x).count(),
-        "fill_pixels": m.fill.iter().filter(|&&x| x).count(),
-        "depth_space": c.space,
-        "scale": c.scale,
-        "shift": c.shift,
-        "fit_pixels": c.fit_pixels,
-        "fit_rms": c.residual,
+/// Stage 3b over every view (needs the photos).
+fn correct_depths(views: &mut [EditedView], completer: &Completer) {
+    let mut completed = take_completions(views);
+    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
+    let sources: Vec<_> = views.iter().map(|v| v.source().expect("photos were given")).collect();
+    let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
+    let scales = completer.correct_depths(&cameras, &sources, &holes, &mut completed);
+    drop((sources, holes));
+    put_back(views, completed);
+    for (v, scale) in views.iter_mut().zip(scales) {
+        v.report.hole_depth_scale = Some(scale);
+    }
+}
+
+/// Stage 3c over every view (needs the photos).
+fn transfer_colors(views: &mut [EditedView], completer: &mut Completer) -> Result<()> {
+    let mut completed = take_completions(views);
+    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
+    let sources: Vec<_> = views.iter().map(|v| v.source().expect("photos were given")).collect();
+    let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
+    let fills: Vec<&[bool]> = views.iter().map(|v| v.masked.fill.as_slice()).collect();
+    let transferred = completer.transfer_colors(&cameras, &sources, &holes, &fills, &mut completed)?;
+    drop((sources, holes, fills));
+    put_back(views, completed);
+    for (v, t) in views.iter_mut().zip(transferred) {
+        v.report.transferred_pixels = Some(t.iter().filter(|&&f| f).count());
+        v.transferred = Some(t);
+    }
+    Ok(())
+}
+
+/// Stage 4: the patch from the completed views, added to the scene without the removed
+/// Gaussians (pruned near it), or the nearest-copy baseline.
+fn fuse_patch(
+    views: &mut [EditedView],
+    scene: &GaussianScene,
+    removed: &[bool],
+    background: GaussianScene,
+    opts: &RemoveOptions,
+) -> Result<Patched> {
+    let patch_pixels: Vec<Vec<bool>> =
+        views.iter().map(|v| v.masked.patch_pixels(&v.completion().depth, opts.keep_alpha)).collect();
+    for (v, p) in views.iter_mut().zip(&patch_pixels) {
+        let count = |x: &[bool]| x.iter().filter(|&&f| f).count();
+        v.report.fill_pixels_without_patch = count(&v.masked.fill) - count(p);
+    }
+    let fviews: Vec<FuseView> = views
+        .iter()
+        .zip(&patch_pixels)
+        .map(|(v, fill)| {
+            let k = v.completion();
+            FuseView { camera: v.camera, rgb: &k.rgb, depth: &k.depth, fill }
+        })
+        .collect();
+    let removed_means: Vec<[f32; 3]> = scene.means.iter().zip(removed).filter(|(_, &r)| r).map(|(m, _)| *m).collect();
+    fuse::patch_scene(background, opts.fill, &fviews, &removed_means, &opts.fuse, opts.stages.prune, &opts.prune)
+}
+
+/// Stage 4b: each view's refinement weights from how its inventions agree with the others'
+/// (consensus.rs); `owned` per view, from the fusion.
+fn consensus_weights(views: &mut [EditedView], owned: &[Vec<bool>], tolerance: f32) {
+    let cviews: Vec<ConsensusView> = views
+        .iter()
+        .zip(owned)
+        .map(|(v, owned)| {
+            let k = v.completion();
+            ConsensusView { camera: v.camera, rgb: &k.rgb, depth: &k.depth, invented: v.invented(), owned }
+        })
+        .collect();
+    let (masks, verdicts) = consensus::loss_masks(&cviews, tolerance);
+    drop(cviews);
+    for ((v, m), verdict) in views.iter_mut().zip(masks).zip(verdicts) {
+        v.consensus = Some(m);
+        v.report.consensus = Some(verdict);
+    }
+}
+
+/// Stage 5: refines `scene` against the completed views, each view's hole weighing
+/// `hole_weight` times the rest, times its consensus weights.
+fn refine_views(
+    gpu: &Gpu,
+    scene: &GaussianScene,
+    views: &[EditedView],
+    extent: f64,
+    opts: &RemoveOptions,
+    progress: Progress,
+) -> Result<(GaussianScene, RefineReport)> {
+    let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
+    let consensus: Option<Vec<Vec<f32>>> = views.iter().map(|v| v.consensus.clone()).collect();
+    let masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
+    let targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
+    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
+    let total = opts.refine.iters as usize;
+    refine::refine(gpu, scene, &cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
+        progress("refine", it as usize, total)
     })
 }
 
@@ -412,34 +384,40 @@ fn view_report(name: &str, m: &MaskedView, c: &Completed) -> serde_json::Value {
 fn final_renders(
     gpu: &Gpu,
     scene: &GaussianScene,
-    cameras: &[Camera],
-    masked: &[MaskedView],
+    views: &[EditedView],
     background: [f32; 3],
     progress: Progress,
 ) -> Result<(Vec<Vec<f32>>, Vec<f64>)> {
     let mut renderer = ViewRenderer::new(gpu, scene, None)?;
     let (mut after, mut bg_psnr) = (Vec::new(), Vec::new());
-    for (i, (m, cam)) in masked.iter().zip(cameras).enumerate() {
-        let rgb = renderer.render(cam, background)?.rgb;
-        let outside: Vec<bool> = m.hole.iter().map(|&x| !x).collect();
-        if let Some(p) = crate::eval::masked_psnr(&rgb, &m.before.rgb, &outside) {
+    for (i, v) in views.iter().enumerate() {
+        let rgb = renderer.render(v.camera, background)?.rgb;
+        let outside: Vec<bool> = v.masked.hole.iter().map(|&x| !x).collect();
+        if let Some(p) = crate::eval::masked_psnr(&rgb, &v.masked.before.rgb, &outside) {
             bg_psnr.push(p);
         }
         after.push(rgb);
-        progress("render", i + 1, cameras.len());
+        progress("render", i + 1, views.len());
     }
     Ok((after, bg_psnr))
 }
 
-fn completer_summary(c: &Completer, stages: &Stages, photos: bool) -> serde_json::Value {
-    if !stages.complete {
-        return serde_json::json!(null);
+/// One view's images for the caller: stage 2's renders and holes, the completion (when it ran)
+/// and the final render.
+fn view_result(v: EditedView, after: Vec<f32>) -> ViewResult {
+    let m = v.masked;
+    let (inpainted, depth) = match v.completed {
+        Some(k) => (k.rgb, k.depth),
+        None => (m.after_removal.rgb.clone(), Vec::new()),
+    };
+    ViewResult {
+        name: v.camera.name.clone(),
+        before: m.before.rgb,
+        removed: m.after_removal.rgb,
+        inpainted,
+        depth,
+        after,
+        hole: m.hole,
+        fill: m.fill,
     }
-    serde_json::json!({
-        "inpainter": c.inpainter.name(),
-        "depth_guidance": c.depth_guidance,
-        "photo_consistent_hole_depth": c.photo_depth && photos,
-        "depth_prior": c.prior.name(),
-        "depth_refiner": c.refiner.as_ref().map(|r| r.path().display().to_string()).unwrap_or_else(|| format!("built-in edge-aware ({} sweeps)", c.refine_sweeps)),
-    })
 }
