@@ -185,3 +185,65 @@ impl PassStats {
             .collect()
     }
 }
+
+/// A bench's markdown table: each line printed as it is made, and kept for `update_results`.
+#[derive(Default)]
+pub struct Table {
+    pub md: String,
+}
+
+impl Table {
+    pub fn line(&mut self, line: String) {
+        println!("{line}");
+        self.md.push_str(&line);
+        self.md.push('\n');
+    }
+}
+
+/// Replaces the text between `<!-- {section}:begin -->` and `<!-- {section}:end -->` in
+/// bench/RESULTS.md with `md`, so the file holds each bench's latest table and no hand-copied
+/// numbers. Skipped with `--no-results` among `args` (a trial run that should not replace them).
+pub fn update_results(args: &[String], section: &str, md: &str) {
+    if args.iter().any(|a| a == "--no-results" || a == "--no-readme") {
+        return;
+    }
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench/RESULTS.md");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let (begin, end) = (format!("<!-- {section}:begin -->"), format!("<!-- {section}:end -->"));
+    let (Some(b), Some(e)) = (text.find(&begin), text.find(&end)) else {
+        println!("bench/RESULTS.md has no {section} markers; left as is");
+        return;
+    };
+    let new = format!("{}{begin}\n{}\n{}", &text[..b], md.trim_end(), &text[e..]);
+    cogeo::io::write_atomic(&path, |w| {
+        use std::io::Write;
+        w.write_all(new.as_bytes()).map_err(Into::into)
+    })
+    .unwrap();
+    println!("updated the {section} table in {}", path.display());
+}
+
+/// The command line a bench ran with, for the heading of its table.
+pub fn command_line(bench: &str, args: &[String]) -> String {
+    if args.is_empty() {
+        format!("`cargo bench --bench {bench}`")
+    } else {
+        format!("`cargo bench --bench {bench} -- {}`", args.join(" "))
+    }
+}
+
+/// Today's date (UTC) as YYYY-MM-DD, for the heading of a bench's table.
+pub fn today() -> String {
+    let days = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_secs() / 86_400;
+    // civil-from-days (Howard Hinnant's algorithm)
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + (m <= 2) as i64;
+    format!("{y:04}-{m:02}-{d:02}")
+}

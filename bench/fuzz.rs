@@ -282,10 +282,12 @@ fn main() {
     });
     let mut results = results.into_inner().unwrap();
     results.sort_by_key(|r| families.iter().position(|f| f.name() == r["family"].as_str().unwrap()));
-    println!("| family | seeds | inputs | inputs/s | accepted | rejected | error kinds | panics | hangs | crashes | over-allocations |");
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut table = common::Table::default();
+    table.line(format!("{}; {}.\n", common::command_line("fuzz", &args), common::today()));
+    table.line("| family | seeds | inputs | inputs/s | accepted | rejected | error kinds | panics | hangs | crashes | over-allocations |".into());
+    table.line("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
     for r in &results {
-        println!(
+        table.line(format!(
             "| {} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {} | {} |",
             r["family"].as_str().unwrap(),
             r["seeds"],
@@ -298,8 +300,9 @@ fn main() {
             r["hangs"],
             r["crashes"],
             r["over_allocations"]
-        );
+        ));
     }
+    common::update_results(&args, "fuzz", &table.md);
     let json = serde_json::json!({"execs_per_family": execs, "salt": salt, "bound_ms": bound_ms,
         "allocation_bound": "16 MiB + 4096 x input bytes per allocation", "families": results});
     std::fs::write(&out, serde_json::to_string_pretty(&json).unwrap() + "\n").unwrap();

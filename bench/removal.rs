@@ -6,11 +6,11 @@
 //!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
 //!                                  --width 160 --height 120 --views 16 --supersample 1 --repeat-full
 //!                                  --retrain 2 --lpips-model lpips.onnx --fid-model inception.onnx
-//!                                  --no-readme]
+//!                                  --no-results]
 //!
 //! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
 //! removal only, cogeo, ground truth on one held-out view), and replaces the table between the
-//! `removal-table` markers of bench/RESULTS.md (unless --no-readme). `--supersample N` makes the scenes with
+//! `removal-table` markers of bench/RESULTS.md (unless --no-results). `--supersample N` makes the scenes with
 //! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
 //! pipeline a second time on the same trained scene, which shows the run-to-run spread (float
 //! atomics in the GPU passes) that any difference between variants must exceed. `--retrain N`
@@ -364,21 +364,6 @@ fn main() {
              Held-out view {first} of the {scene} scene: input, removal only, cogeo, ground truth.\n"
         );
     }
-    if !args.iter().any(|a| a == "--no-readme") {
-        let readme_path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench/RESULTS.md");
-        let readme = std::fs::read_to_string(&readme_path).unwrap();
-        let (begin, end) = ("<!-- removal-table:begin -->", "<!-- removal-table:end -->");
-        if let (Some(b), Some(e)) = (readme.find(begin), readme.find(end)) {
-            let new = format!("{}{begin}\n{md}{image_line}{}", &readme[..b], &readme[e..]);
-            cogeo::io::write_atomic(&readme_path, |w| {
-                use std::io::Write;
-                w.write_all(new.as_bytes()).map_err(Into::into)
-            })
-            .unwrap();
-            println!("updated the removal table in {}", readme_path.display());
-        } else {
-            println!("bench/RESULTS.md has no removal-table markers; left as is");
-        }
-    }
+    common::update_results(&args, "removal-table", &format!("{md}{image_line}"));
     std::fs::remove_dir_all(&root).ok();
 }

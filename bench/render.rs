@@ -2,7 +2,8 @@
 //!
 //!   cargo bench --bench render [-- --sizes 100000,1000000,3000000 --resolutions 512x512,1920x1080 --frames 3]
 //!
-//! Prints a table and writes bench/results/render-<device>.json.
+//! Prints a table, writes bench/results/render-<device>.json and replaces the render table of
+//! bench/RESULTS.md (unless --no-results).
 
 #[path = "common.rs"]
 mod common;
@@ -51,8 +52,16 @@ fn main() {
             }));
         }
     }
-    println!("\n| Gaussians | resolution | intersections | project | depth sort | count scan | emit | tile sort | ranges | blend | GPU total ms | wall ms |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!();
+    let mut table = common::Table::default();
+    table.line(format!(
+        "{}, {frames} frames, median per pass (GPU timestamps), ms; {}, {}.\n",
+        common::command_line("render", &args),
+        gpu.info().name,
+        common::today()
+    ));
+    table.line("| Gaussians | resolution | intersections | project | depth sort | count scan | emit | tile sort | ranges | blend | GPU total ms | wall ms |".into());
+    table.line("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
     for r in &rows {
         let pass = |name: &str| {
             r["passes"]
@@ -63,7 +72,7 @@ fn main() {
                 .map(|p| p["ms"].as_f64().unwrap())
                 .unwrap_or(0.0)
         };
-        println!(
+        table.line(format!(
             "| {} | {}x{} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
             r["gaussians"],
             r["width"],
@@ -78,8 +87,9 @@ fn main() {
             pass("blend"),
             r["gpu_ms"].as_f64().unwrap(),
             r["wall_ms"].as_f64().unwrap()
-        );
+        ));
     }
+    common::update_results(&args, "render", &table.md);
     let path = common::results_path(&format!("render-{}.json", common::device_slug(&gpu)));
     common::write_json(
         &path,

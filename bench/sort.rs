@@ -91,11 +91,19 @@ fn main() {
                                      "mb_moved": mb, "share_of_copy": share, "roof_ms": roof_ms,
                                      "speedup_at_roof": c / roof_ms}));
     }
-    println!("\n| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU | MB moved | % of copy roof | sort_unstable / (sort at the roof) |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|");
+    println!();
+    let mut table = common::Table::default();
+    table.line(format!(
+        "{}, {shape:?} shape, median of {runs} runs; {}, {}.\n",
+        common::command_line("sort", &args),
+        gpu.info().name,
+        common::today()
+    ));
+    table.line("| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU | MB moved | % of copy roof | sort_unstable / (sort at the roof) |".into());
+    table.line("|---:|---:|---:|---:|---:|---:|---:|".into());
     for r in &rows {
         let f = |k: &str| r[k].as_f64().unwrap();
-        println!(
+        table.line(format!(
             "| {} | {:.1} | {:.1} | {:.2}x | {:.1} | {:.1} | {:.2}x |",
             r["pairs"],
             f("gpu_ms"),
@@ -104,8 +112,9 @@ fn main() {
             f("mb_moved"),
             100.0 * f("share_of_copy"),
             f("speedup_at_roof")
-        );
+        ));
     }
+    common::update_results(&args, "sort", &table.md);
     let suffix = named.map(|s| format!("-{s}")).unwrap_or_default();
     let path = common::results_path(&format!("sort-{}{suffix}.json", common::device_slug(&gpu)));
     common::write_json(

@@ -90,6 +90,26 @@ fn main() {
             "knn_s": knn_s, "distill_setup_s": setup, "distill_s_per_iteration": per_iter,
             "vote_s_per_view": vote_per_view, "project_s": project_s}));
     }
+    let mut table = common::Table::default();
+    table.line(format!("{}; {}, {}.\n", common::command_line("tag", &args), gpu.info().name, common::today()));
+    table.line("| Gaussians | resolution | views | kNN s | distill setup s | distill s / iteration | vote s / view | project s |".into());
+    table.line("|---:|---|---:|---:|---:|---:|---:|---:|".into());
+    for r in &rows {
+        let f = |k: &str| r[k].as_f64().unwrap();
+        table.line(format!(
+            "| {} | {}x{} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} |",
+            r["gaussians"],
+            r["width"],
+            r["height"],
+            r["views"],
+            f("knn_s"),
+            f("distill_setup_s"),
+            f("distill_s_per_iteration"),
+            f("vote_s_per_view"),
+            f("project_s")
+        ));
+    }
+    common::update_results(&args, "tag", &table.md);
     let path = common::results_path(&format!("tag-{}.json", common::device_slug(&gpu)));
     common::write_json(&path, &serde_json::json!({ "device": gpu.info().summary(), "rows": rows }));
 }

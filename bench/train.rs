@@ -76,6 +76,50 @@ fn main() {
             "submits_per_iteration": submits, "readbacks_per_iteration": readbacks,
             "passes": stats.json(roof.roof_gbps())}));
     }
+    let mut table = common::Table::default();
+    table.line(format!(
+        "{}, median of {iters} iterations after a warm-up, ms; {}, {}, copy roof {:.1} GB/s.\n",
+        common::command_line("train", &args),
+        gpu.info().name,
+        common::today(),
+        roof.roof_gbps()
+    ));
+    table.line("| Gaussians | resolution | SH | step | blend | loss | blend backward | project backward (+ Adam) | GPU ms | wall ms | submits / readbacks |".into());
+    table.line("|---:|---|---|---|---:|---:|---:|---:|---:|---:|---|".into());
+    for r in &rows {
+        // the projection backward's name says whether Adam rode in it ("project backward + adam")
+        let pass = |name: &str| -> String {
+            let ms: f64 = r["passes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .filter(|p| {
+                    let pass = p["pass"].as_str().unwrap();
+                    pass == name || (name == "project backward" && pass.starts_with(name))
+                })
+                .map(|p| p["ms"].as_f64().unwrap())
+                .sum();
+            format!("{ms:.1}")
+        };
+        let f = |k: &str| r[k].as_f64().unwrap();
+        table.line(format!(
+            "| {} | {}x{} | {} | {} | {} | {} | {} | {} | {:.1} | {:.1} | {} / {} |",
+            r["gaussians"],
+            r["width"],
+            r["height"],
+            if r["full_sh"] == true { "all bands" } else { "degree 0" },
+            if r["fused_step"] == true { "fused" } else { "apart" },
+            pass("blend"),
+            pass("loss"),
+            pass("blend backward"),
+            pass("project backward"),
+            f("gpu_ms"),
+            f("wall_ms"),
+            r["submits_per_iteration"],
+            r["readbacks_per_iteration"]
+        ));
+    }
+    common::update_results(&args, "train", &table.md);
     let path = common::results_path(&format!("train-{}.json", common::device_slug(&gpu)));
     common::write_json(
         &path,

@@ -100,11 +100,18 @@ fn main() {
         ));
     }
     println!();
-    println!("| scene | iterations | it/s | Gaussians | test PSNR | test SSIM | train PSNR | wall s |");
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+    let mut table = common::Table::default();
+    table.line(format!(
+        "{}; {}, {}.\n",
+        common::command_line("train_quality", &args),
+        gpu.info().name,
+        common::today()
+    ));
+    table.line("| scene | iterations | it/s | Gaussians | test PSNR | test SSIM | train PSNR | wall s |".into());
+    table.line("|---|---:|---:|---:|---:|---:|---:|---:|".into());
     for r in &rows {
         let f = |k: &str, d: usize| r[k].as_f64().map(|v| format!("{v:.d$}")).unwrap_or_else(|| "n/a".into());
-        println!(
+        table.line(format!(
             "| {} | {} | {} | {} | {} | {} | {} | {} |",
             r["scene"].as_str().unwrap_or(""),
             r["iterations"],
@@ -114,8 +121,9 @@ fn main() {
             f("test_ssim", 4),
             f("train_psnr", 2),
             f("wall_s", 0)
-        );
+        ));
     }
+    common::update_results(&args, "train-quality", &table.md);
     println!();
     for r in &rows {
         if let (Some(p), Some(t)) = (r["test_psnr"].as_f64(), r["target_psnr"].as_f64()) {
