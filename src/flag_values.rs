@@ -1,6 +1,9 @@
 //! Values of command-line flags that need more than a number: parsed here, in the library, so the
 //! fuzz bench (bench/fuzz.rs) reaches the same code clap calls.
 
+/// The default of every `--background` flag: black, as INRIA trains.
+pub const DEFAULT_BACKGROUND: &str = "0,0,0";
+
 /// `--background r,g,b`: three numbers in [0, 1].
 pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
     let v: Vec<f32> = s

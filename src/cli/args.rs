@@ -21,9 +21,13 @@ pub struct DeviceArgs {
     pub max_device_memory: Option<f64>,
 }
 
-/// Resolution at which a capture is used (train, tag, remove and run share it).
-#[derive(Args, Clone, Copy)]
-pub struct ScaleArgs {
+/// Which images of a capture are used and at what resolution (train, tag, remove and run share it).
+#[derive(Args, Clone)]
+pub struct CaptureArgs {
+    /// Image folder inside --data (e.g. images_2, images_4 for downscaled copies; intrinsics are
+    /// scaled, masks are resized to its images).
+    #[arg(long, default_value = cogeo::scene::dataset::DEFAULT_IMAGE_FOLDER)]
+    pub images: String,
     /// Box-filter every image by N x N pixels on load (intrinsics follow; masks are resized to the
     /// result): train, tag and edit a capture at 1/N resolution without writing a copy. Use the same
     /// value for train, tag and remove.

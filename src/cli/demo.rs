@@ -30,7 +30,7 @@ pub struct DemoArgs {
     /// LPIPS and FID networks for the report (see `cogeo eval --help`); scripts/demo.sh passes the
     /// shared LPIPS network when it is there.
     #[command(flatten)]
-    pub models: super::eval::MetricModels,
+    pub models: cogeo::eval::models::MetricModels,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -142,6 +142,7 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
     eprintln!("== 6/6 evaluate against the exact object-free ground truth");
     let t = std::time::Instant::now();
     let truth = cogeo::synth::ground_truth(&data, &a.labels);
+    let thresholds = cogeo::eval::folder::SynthThresholds::default();
     let eval = |dir: &str| {
         evaluate(&EvalConfig {
             renders: out.join(dir).join("test_after"),
@@ -152,8 +153,8 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
             data: Some(data.clone()),
             depth: None,
             scene: Some(out.join(dir).join("scene.ply")),
-            tau: 0.05,
-            leftover_margin: 0.05,
+            tau: thresholds.tau,
+            leftover_margin: thresholds.leftover_margin,
             lpips: a.models.lpips_model.clone(),
             lpips_input: a.models.lpips_input(),
             lpips_min_side: a.models.lpips_min_side,

@@ -59,7 +59,7 @@ pub struct Entry {
 }
 
 fn default_images() -> String {
-    "images".into()
+    cogeo::scene::dataset::DEFAULT_IMAGE_FOLDER.into()
 }
 
 fn one() -> u32 {

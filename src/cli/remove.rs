@@ -1,7 +1,7 @@
 //! `cogeo remove`: the removal pipeline (src/removal) on a tagged scene, with its outputs: edited
 //! and held-out views, masks, depth, the edited scene and report.json.
 
-use super::args::{load_scene, open_gpu, DeviceArgs, ScaleArgs};
+use super::args::{load_scene, open_gpu, CaptureArgs, DeviceArgs};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use cogeo::io::{write_exr, write_png_rgb};
@@ -36,11 +36,8 @@ pub struct RemoveArgs {
     /// rendered (and scored against gt_background/ when it is a `cogeo synth` dataset).
     #[arg(long)]
     pub data: PathBuf,
-    /// Image folder inside --data.
-    #[arg(long, default_value = "images")]
-    pub images: String,
     #[command(flatten)]
-    pub scale: ScaleArgs,
+    pub capture: CaptureArgs,
     /// Output folder: scene.ply, report.json, before/ after/ removed/ inpainted/ mask/ depth/.
     #[arg(long)]
     pub out: PathBuf,
@@ -107,7 +104,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     let scene_labels = cogeo::tag::scene_labels(&scene).ok_or_else(|| {
         anyhow!("{}: the scene has no `label` property; tag it first with `cogeo tag`", a.scene.display())
     })?;
-    let data = cogeo::scene::dataset::load(&a.data, &a.images, a.scale.downscale)?;
+    let data = cogeo::scene::dataset::load(&a.data, &a.capture.images, a.capture.downscale)?;
     let mut opts = f.options.clone();
     opts.labels = labels.clone();
     opts.fuse.stride = opts.fuse.stride.max(1);
@@ -184,7 +181,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     write_views(&out.join("test_before"), &test_cams, &held_out.before)?;
     write_views(&out.join("test_after"), &test_cams, &held_out.after)?;
     // synth ground truth is stored at the dataset's resolution; a downscaled run is not scored
-    let scores = if a.scale.downscale == 1 {
+    let scores = if a.capture.downscale == 1 {
         score_against_synth(&a.data, &labels, &test_cams, &held_out, &cameras, v)?
     } else {
         GroundTruthScores::default()

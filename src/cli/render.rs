@@ -53,10 +53,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub height: Option<u32>,
     /// Background color r,g,b in [0, 1].
-    #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
+    #[arg(long, default_value = cogeo::flag_values::DEFAULT_BACKGROUND, value_parser = parse_rgb)]
     pub background: [f32; 3],
     /// Near plane: Gaussians with view depth at or below it are culled (INRIA uses 0.2).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = RenderSettings::default().near)]
     pub near: f32,
     /// Use at most this SH degree for color (default: the scene's).
     #[arg(long)]

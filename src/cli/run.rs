@@ -1,6 +1,6 @@
 //! `cogeo run`: train, tag and remove in one command, the steps of `cogeo::pipeline`.
 
-use super::args::{DeviceArgs, ScaleArgs};
+use super::args::{CaptureArgs, DeviceArgs};
 use super::remove::RemovalFlags;
 use super::{dispatch, Cli, Command};
 use anyhow::{anyhow, Context, Result};
@@ -18,11 +18,8 @@ pub struct RunArgs {
     /// Masks for tagging (see `cogeo tag --masks`).
     #[arg(long)]
     pub masks: PathBuf,
-    /// Image folder inside --data.
-    #[arg(long, default_value = "images")]
-    pub images: String,
     #[command(flatten)]
-    pub scale: ScaleArgs,
+    pub capture: CaptureArgs,
     /// Output folder: train/, tagged.ply (+ .json), removal/.
     #[arg(long)]
     pub out: PathBuf,
@@ -47,7 +44,7 @@ pub struct RunArgs {
 pub fn run(a: RunArgs) -> Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create output folder", a.out.display()))?;
     let layout = Layout { out: &a.out };
-    let capture = Capture { data: &a.data, images: Some(&a.images), downscale: Some(a.scale.downscale) };
+    let capture = Capture { data: &a.data, images: Some(&a.capture.images), downscale: Some(a.capture.downscale) };
     let (seed, background) = (a.removal.options.seed.to_string(), a.removal.options.background);
     let background = background.map(|c| c.to_string()).join(",");
     let mut device = Vec::new();

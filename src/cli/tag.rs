@@ -1,6 +1,6 @@
 //! `cogeo tag`: an object label for every Gaussian from per-view masks or text prompts.
 
-use super::args::{load_scene, open_gpu, progress, DeviceArgs, ScaleArgs};
+use super::args::{load_scene, open_gpu, progress, CaptureArgs, DeviceArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use cogeo::scene::{ply, Camera};
@@ -15,11 +15,8 @@ pub struct TagArgs {
     /// Dataset folder the scene was trained from (COLMAP model + images; cameras and the split).
     #[arg(long)]
     pub data: PathBuf,
-    /// Image folder inside --data (e.g. images_2); masks are resized to its images if needed.
-    #[arg(long, default_value = "images")]
-    pub images: String,
     #[command(flatten)]
-    pub scale: ScaleArgs,
+    pub capture: CaptureArgs,
     /// Masks: a folder of 8-bit instance maps named like the images (pixel value q = object q,
     /// 0 = background, 255 = ignore), or a folder of per-object subfolders holding binary masks
     /// (nonzero = object; objects numbered 1.. in sorted subfolder order). Relative paths are tried
@@ -56,7 +53,7 @@ pub fn run(a: TagArgs) -> Result<()> {
     if a.out.extension().and_then(|e| e.to_str()) != Some("ply") {
         bail!("{}: --out must name a .ply file", a.out.display());
     }
-    let data = cogeo::scene::dataset::load(&a.data, &a.images, a.scale.downscale)?;
+    let data = cogeo::scene::dataset::load(&a.data, &a.capture.images, a.capture.downscale)?;
     for w in &data.warnings {
         eprintln!("warning: {w}");
     }

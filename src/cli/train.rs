@@ -1,6 +1,6 @@
 //! `cogeo train`: a Gaussian scene from a COLMAP capture, with checkpoints and resume.
 
-use super::args::{open_gpu, DeviceArgs, ScaleArgs};
+use super::args::{open_gpu, CaptureArgs, DeviceArgs};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use cogeo::scene::ply;
@@ -16,11 +16,8 @@ pub struct TrainArgs {
     /// Output folder: scene.ply, metrics.json and checkpoint/ (created if missing).
     #[arg(long)]
     pub out: PathBuf,
-    /// Image folder inside --data (e.g. images_2, images_4 for downscaled copies; intrinsics are scaled).
-    #[arg(long, default_value = "images")]
-    pub images: String,
     #[command(flatten)]
-    pub scale: ScaleArgs,
+    pub capture: CaptureArgs,
     /// Continue from the last checkpoint in --out (starts fresh when there is none).
     #[arg(long)]
     pub resume: bool,
@@ -46,7 +43,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
     if a.config.sh_degree > cogeo::scene::MAX_SH_DEGREE {
         bail!("--sh-degree must be 0..{}", cogeo::scene::MAX_SH_DEGREE);
     }
-    let data = dataset::load(&a.data, &a.images, a.scale.downscale)?;
+    let data = dataset::load(&a.data, &a.capture.images, a.capture.downscale)?;
     for w in &data.warnings {
         eprintln!("warning: {w}");
     }

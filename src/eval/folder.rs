@@ -20,6 +20,25 @@ pub enum Protocol {
     Full,
 }
 
+/// The thresholds of the synth-only scores: the one home of their defaults, also `cogeo eval`'s
+/// flags.
+#[derive(Clone, Debug, clap::Args)]
+pub struct SynthThresholds {
+    /// Floater threshold, relative to the true depth.
+    #[arg(long, default_value_t = 0.05)]
+    pub tau: f64,
+    /// Leftover score margin: a mask pixel counts as leftover when the render is closer to the
+    /// image with the objects than to the ground truth by more than this mean RGB difference.
+    #[arg(long, default_value_t = 0.05)]
+    pub leftover_margin: f32,
+}
+
+impl Default for SynthThresholds {
+    fn default() -> Self {
+        crate::config::defaults()
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct EvalConfig {
     pub renders: PathBuf,

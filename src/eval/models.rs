@@ -14,7 +14,7 @@
 use crate::image_ops::{bounding_box, crop, resize_bilinear, Rect};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// How images are fed to a network: input names (None: the model's own, in its order) and the
 /// affine map from [0, 1].
@@ -26,14 +26,14 @@ pub struct NetworkInput {
 }
 
 impl NetworkInput {
-    /// LPIPS's own convention: [-1, 1].
+    /// LPIPS's own convention, [-1, 1] (`MetricModels`' defaults).
     pub fn lpips_default() -> NetworkInput {
-        NetworkInput { names: None, scale: 2.0, offset: -1.0 }
+        MetricModels::default().lpips_input()
     }
 
-    /// TF-style FID (pytorch-fid, clean-fid): x_uint8 / 128 - 1.
+    /// TF-style FID (pytorch-fid, clean-fid), x_uint8 / 128 - 1 (`MetricModels`' defaults).
     pub fn fid_default() -> NetworkInput {
-        NetworkInput { names: None, scale: 255.0 / 128.0, offset: -1.0 }
+        MetricModels::default().fid_input()
     }
 
     /// The input names to feed: the given ones, which the model must have, else all of the model's.
@@ -175,5 +175,55 @@ mod tests {
         assert_eq!((same.x0, same.x1, same.y0, same.y1), (0, 20, 0, 11));
         let small = grow_to(Rect { x0: 1, y0: 1, x1: 2, y1: 2 }, 64, 20, 11);
         assert_eq!((small.width(), small.height()), (20, 11));
+    }
+}
+
+/// The learned-metric networks and how to feed them; defaults fit the published LPIPS (v0.1) and
+/// TF-FID Inception-v3 exports, whose input names are read from the model.
+#[derive(clap::Args, Clone, Debug)]
+pub struct MetricModels {
+    /// LPIPS network (ONNX): two image inputs [1,3,H,W], one output value. Reports full-image,
+    /// bounding-box and masked LPIPS (masked: the render pasted into the ground truth inside the
+    /// mask only, cropped to the mask's box); with --data also never-seen and seen-elsewhere.
+    #[arg(long)]
+    pub lpips_model: Option<PathBuf>,
+    /// The LPIPS inputs' names, e.g. `img0,img1` (default: the model's two inputs, in its order).
+    #[arg(long, value_delimiter = ',', num_args = 2)]
+    pub lpips_inputs: Option<Vec<String>>,
+    /// LPIPS input = scale * rgb + offset, rgb in [0,1] (default 2, -1: the [-1,1] of LPIPS).
+    #[arg(long, default_value_t = 2.0, allow_negative_numbers = true)]
+    pub lpips_scale: f32,
+    #[arg(long, default_value_t = -1.0, allow_negative_numbers = true)]
+    pub lpips_offset: f32,
+    /// Smallest side the LPIPS network accepts (AlexNet: 32): smaller images are upsampled and
+    /// crops grown to it.
+    #[arg(long, default_value_t = 32)]
+    pub lpips_min_side: usize,
+    /// FID feature network (ONNX): one image input [N,3,299,299] (resized bilinearly), output [N,D].
+    #[arg(long)]
+    pub fid_model: Option<PathBuf>,
+    /// The FID input's name (default: the model's only input).
+    #[arg(long)]
+    pub fid_input: Option<String>,
+    /// FID input = scale * rgb + offset, rgb in [0,1] (default 255/128, -1: TF-FID's x/128 - 1).
+    #[arg(long, default_value_t = 255.0 / 128.0, allow_negative_numbers = true)]
+    pub fid_scale: f32,
+    #[arg(long, default_value_t = -1.0, allow_negative_numbers = true)]
+    pub fid_offset: f32,
+}
+
+impl Default for MetricModels {
+    fn default() -> Self {
+        crate::config::defaults()
+    }
+}
+
+impl MetricModels {
+    pub fn lpips_input(&self) -> NetworkInput {
+        NetworkInput { names: self.lpips_inputs.clone(), scale: self.lpips_scale, offset: self.lpips_offset }
+    }
+
+    pub fn fid_input(&self) -> NetworkInput {
+        NetworkInput { names: self.fid_input.clone().map(|n| vec![n]), scale: self.fid_scale, offset: self.fid_offset }
     }
 }

@@ -100,7 +100,7 @@ pub struct RemoveOptions {
     #[command(flatten)]
     pub refine: RefineConfig,
     /// Background color r,g,b in [0, 1] (the one the scene was trained with).
-    #[arg(long, default_value = "0,0,0", value_parser = crate::flag_values::parse_rgb)]
+    #[arg(long, default_value = crate::flag_values::DEFAULT_BACKGROUND, value_parser = crate::flag_values::parse_rgb)]
     pub background: [f32; 3],
     /// Random seed (exemplar fill, refinement view order, diffusion noise).
     #[arg(long, default_value_t = 0)]

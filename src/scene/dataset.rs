@@ -30,6 +30,9 @@ pub struct Dataset {
 
 const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "PNG", "JPG"];
 
+/// The image folder inside a capture that every command reads unless told another.
+pub const DEFAULT_IMAGE_FOLDER: &str = "images";
+
 /// Finds `stem.<ext>` in `dir`.
 pub fn find_image(dir: &Path, stem: &str) -> Option<PathBuf> {
     IMAGE_EXTENSIONS.iter().map(|e| dir.join(format!("{stem}.{e}"))).find(|p| p.exists())

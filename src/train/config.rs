@@ -43,7 +43,7 @@ pub struct TrainConfig {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Background color r,g,b in [0, 1] behind the Gaussians.
-    #[arg(long, default_value = "0,0,0", value_parser = parse_rgb)]
+    #[arg(long, default_value = crate::flag_values::DEFAULT_BACKGROUND, value_parser = parse_rgb)]
     pub background: [f32; 3],
     /// Multiplies the SH learning rates (1: INRIA's). The removal's short refinement raises it:
     /// Adam moves a coefficient by about its learning rate per step, so the INRIA rate needs
