@@ -193,6 +193,20 @@ pub struct Table {
 }
 
 impl Table {
+    /// A table headed by the command line that made it (with `what`, e.g. "3 frames, ms"), the
+    /// device (`device`, or none for a CPU-only bench) and the date, then its `columns` row
+    /// ("| a | b |") and `align` row ("|---|---:|").
+    pub fn new(bench: &str, args: &[String], what: &str, device: Option<&str>, columns: &str, align: &str) -> Table {
+        let mut t = Table::default();
+        let what = if what.is_empty() { String::new() } else { format!(", {what}") };
+        let device = device.map(|d| format!("{d}, ")).unwrap_or_default();
+        println!();
+        t.line(format!("{}{what}; {device}{}.\n", command_line(bench, args), today()));
+        t.line(columns.into());
+        t.line(align.into());
+        t
+    }
+
     pub fn line(&mut self, line: String) {
         println!("{line}");
         self.md.push_str(&line);

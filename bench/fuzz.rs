@@ -282,10 +282,14 @@ fn main() {
     });
     let mut results = results.into_inner().unwrap();
     results.sort_by_key(|r| families.iter().position(|f| f.name() == r["family"].as_str().unwrap()));
-    let mut table = common::Table::default();
-    table.line(format!("{}; {}.\n", common::command_line("fuzz", &args), common::today()));
-    table.line("| family | seeds | inputs | inputs/s | accepted | rejected | error kinds | panics | hangs | crashes | over-allocations |".into());
-    table.line("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
+    let mut table = common::Table::new(
+        "fuzz",
+        &args,
+        "",
+        None,
+        "| family | seeds | inputs | inputs/s | accepted | rejected | error kinds | panics | hangs | crashes | over-allocations |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    );
     for r in &results {
         table.line(format!(
             "| {} | {} | {} | {:.0} | {} | {} | {} | {} | {} | {} | {} |",

@@ -52,16 +52,8 @@ fn main() {
             }));
         }
     }
-    println!();
-    let mut table = common::Table::default();
-    table.line(format!(
-        "{}, {frames} frames, median per pass (GPU timestamps), ms; {}, {}.\n",
-        common::command_line("render", &args),
-        gpu.info().name,
-        common::today()
-    ));
-    table.line("| Gaussians | resolution | intersections | project | depth sort | count scan | emit | tile sort | ranges | blend | GPU total ms | wall ms |".into());
-    table.line("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|".into());
+    let what = format!("{frames} frames, median per pass (GPU timestamps), ms");
+    let mut table = common::Table::new("render", &args, &what, Some(&gpu.info().name), "| Gaussians | resolution | intersections | project | depth sort | count scan | emit | tile sort | ranges | blend | GPU total ms | wall ms |", "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in &rows {
         let pass = |name: &str| {
             r["passes"]

@@ -91,16 +91,8 @@ fn main() {
                                      "mb_moved": mb, "share_of_copy": share, "roof_ms": roof_ms,
                                      "speedup_at_roof": c / roof_ms}));
     }
-    println!();
-    let mut table = common::Table::default();
-    table.line(format!(
-        "{}, {shape:?} shape, median of {runs} runs; {}, {}.\n",
-        common::command_line("sort", &args),
-        gpu.info().name,
-        common::today()
-    ));
-    table.line("| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU | MB moved | % of copy roof | sort_unstable / (sort at the roof) |".into());
-    table.line("|---:|---:|---:|---:|---:|---:|---:|".into());
+    let what = format!("{shape:?} shape, median of {runs} runs");
+    let mut table = common::Table::new("sort", &args, &what, Some(&gpu.info().name), "| pairs | GPU radix ms | sort_unstable ms | sort_unstable / GPU | MB moved | % of copy roof | sort_unstable / (sort at the roof) |", "|---:|---:|---:|---:|---:|---:|---:|");
     for r in &rows {
         let f = |k: &str| r[k].as_f64().unwrap();
         table.line(format!(

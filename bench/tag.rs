@@ -90,10 +90,7 @@ fn main() {
             "knn_s": knn_s, "distill_setup_s": setup, "distill_s_per_iteration": per_iter,
             "vote_s_per_view": vote_per_view, "project_s": project_s}));
     }
-    let mut table = common::Table::default();
-    table.line(format!("{}; {}, {}.\n", common::command_line("tag", &args), gpu.info().name, common::today()));
-    table.line("| Gaussians | resolution | views | kNN s | distill setup s | distill s / iteration | vote s / view | project s |".into());
-    table.line("|---:|---|---:|---:|---:|---:|---:|---:|".into());
+    let mut table = common::Table::new("tag", &args, "", Some(&gpu.info().name), "| Gaussians | resolution | views | kNN s | distill setup s | distill s / iteration | vote s / view | project s |", "|---:|---|---:|---:|---:|---:|---:|---:|");
     for r in &rows {
         let f = |k: &str| r[k].as_f64().unwrap();
         table.line(format!(

@@ -76,16 +76,15 @@ fn main() {
             "submits_per_iteration": submits, "readbacks_per_iteration": readbacks,
             "passes": stats.json(roof.roof_gbps())}));
     }
-    let mut table = common::Table::default();
-    table.line(format!(
-        "{}, median of {iters} iterations after a warm-up, ms; {}, {}, copy roof {:.1} GB/s.\n",
-        common::command_line("train", &args),
-        gpu.info().name,
-        common::today(),
-        roof.roof_gbps()
-    ));
-    table.line("| Gaussians | resolution | SH | step | blend | loss | blend backward | project backward (+ Adam) | GPU ms | wall ms | submits / readbacks |".into());
-    table.line("|---:|---|---|---|---:|---:|---:|---:|---:|---:|---|".into());
+    let what = format!("median of {iters} iterations after a warm-up, ms, copy roof {:.1} GB/s", roof.roof_gbps());
+    let mut table = common::Table::new(
+        "train",
+        &args,
+        &what,
+        Some(&gpu.info().name),
+        "| Gaussians | resolution | SH | step | blend | loss | blend backward | project backward (+ Adam) | GPU ms | wall ms | submits / readbacks |",
+        "|---:|---|---|---|---:|---:|---:|---:|---:|---:|---|",
+    );
     for r in &rows {
         // the projection backward's name says whether Adam rode in it ("project backward + adam")
         let pass = |name: &str| -> String {

@@ -99,16 +99,14 @@ fn main() {
             &s(&["--images", &images, "--downscale", &downscale, "--iters", &iters]),
         ));
     }
-    println!();
-    let mut table = common::Table::default();
-    table.line(format!(
-        "{}; {}, {}.\n",
-        common::command_line("train_quality", &args),
-        gpu.info().name,
-        common::today()
-    ));
-    table.line("| scene | iterations | it/s | Gaussians | test PSNR | test SSIM | train PSNR | wall s |".into());
-    table.line("|---|---:|---:|---:|---:|---:|---:|---:|".into());
+    let mut table = common::Table::new(
+        "train_quality",
+        &args,
+        "",
+        Some(&gpu.info().name),
+        "| scene | iterations | it/s | Gaussians | test PSNR | test SSIM | train PSNR | wall s |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
+    );
     for r in &rows {
         let f = |k: &str, d: usize| r[k].as_f64().map(|v| format!("{v:.d$}")).unwrap_or_else(|| "n/a".into());
         table.line(format!(

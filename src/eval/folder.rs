@@ -33,11 +33,7 @@ pub struct SynthThresholds {
     pub leftover_margin: f32,
 }
 
-impl Default for SynthThresholds {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(SynthThresholds);
 
 #[derive(Clone, Debug)]
 pub struct EvalConfig {

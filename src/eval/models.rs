@@ -212,11 +212,7 @@ pub struct MetricModels {
     pub fid_offset: f32,
 }
 
-impl Default for MetricModels {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(MetricModels);
 
 impl MetricModels {
     pub fn lpips_input(&self) -> NetworkInput {

@@ -129,11 +129,7 @@ pub struct FuseConfig {
     pub surfels: bool,
 }
 
-impl Default for FuseConfig {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(FuseConfig);
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PatchPoint {

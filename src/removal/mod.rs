@@ -107,11 +107,7 @@ pub struct RemoveOptions {
     pub seed: u64,
 }
 
-impl Default for RemoveOptions {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(RemoveOptions);
 
 impl RemoveOptions {
     /// The refinement's settings with the removal's background and seed.

@@ -20,11 +20,7 @@ pub struct PruneSettings {
     pub min_neighbours: usize,
 }
 
-impl Default for PruneSettings {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(PruneSettings);
 
 impl PruneSettings {
     /// The criteria, with `spacing()` (the patch spacing s) giving near 2 s and radius 3 s when

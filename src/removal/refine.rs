@@ -85,11 +85,7 @@ pub struct RefineConfig {
     pub hole_weight: f32,
 }
 
-impl Default for RefineConfig {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(RefineConfig);
 
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct RefineReport {

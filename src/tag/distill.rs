@@ -258,11 +258,7 @@ pub struct DistillConfig {
     pub seed: u64,
 }
 
-impl Default for DistillConfig {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(DistillConfig);
 
 pub struct Distilled {
     /// n x dim, row-major.

@@ -229,11 +229,7 @@ pub struct TagOptions {
     pub margin: f32,
 }
 
-impl Default for TagOptions {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(TagOptions);
 
 pub struct Tagged {
     pub tags: Tags,

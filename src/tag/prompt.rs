@@ -39,11 +39,7 @@ pub struct PromptModels {
     pub box_threshold: f32,
 }
 
-impl Default for PromptModels {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(PromptModels);
 
 pub struct PromptSegmenter {
     detector: Model,

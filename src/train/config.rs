@@ -56,11 +56,7 @@ pub struct TrainConfig {
     pub shape_lr_gain: f32,
 }
 
-impl Default for TrainConfig {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(TrainConfig);
 
 impl TrainConfig {
     /// A run shorter than INRIA's densifies from a tenth of its iterations at the latest and

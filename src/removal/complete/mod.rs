@@ -116,11 +116,7 @@ pub struct CompletionConfig {
     pub soft_radius: f32,
 }
 
-impl Default for CompletionConfig {
-    fn default() -> Self {
-        crate::config::defaults()
-    }
-}
+crate::default_from_flags!(CompletionConfig);
 
 /// The models and settings of completion.
 pub struct Completer {
