@@ -1,8 +1,7 @@
 //! Every default lives once: on the clap attribute of the library config struct that defines its
 //! flag (`TrainConfig`, `DistillConfig`, `RemoveOptions`, `RefineConfig`, ...). Those structs'
 //! `Default` (`default_from_flags!`) is what their flags give when none is passed, read back from
-//! clap by `defaults`, so
-//! the library, the command line and the pipeline recipes cannot disagree.
+//! clap by `defaults`, so the library, the command line and the pipeline recipes cannot disagree.
 
 /// The value of a config struct when no flag is given: clap parses an empty command line.
 pub fn defaults<T: clap::Args + clap::FromArgMatches>() -> T {
