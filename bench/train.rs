@@ -132,7 +132,7 @@ fn synthetic_target(w: u32, h: u32) -> Dataset {
     let mut rng = Rng::new(3);
     let image: Vec<f32> = (0..3 * (w * h) as usize).map(|_| rng.uniform() as f32).collect();
     Dataset {
-        train: vec![View { camera, image, path: "target".into() }],
+        train: vec![View { camera, image, path: "target".into(), undistortion: None }],
         test: Vec::new(),
         points: Vec::new(),
         extent: 3.0,

@@ -71,6 +71,22 @@ pub fn sample_lanczos3(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64
     (sum / weight) as f32
 }
 
+/// One byte per pixel (a label map) resized by the nearest pixel, pixel centers to pixel centers.
+pub fn resize_nearest_u8(src: &[u8], w: u32, h: u32, nw: u32, nh: u32) -> Vec<u8> {
+    if (w, h) == (nw, nh) {
+        return src.to_vec();
+    }
+    let mut out = vec![0u8; (nw * nh) as usize];
+    for y in 0..nh {
+        let sy = (((y as f64 + 0.5) * h as f64 / nh as f64) as u32).min(h - 1);
+        for x in 0..nw {
+            let sx = (((x as f64 + 0.5) * w as f64 / nw as f64) as u32).min(w - 1);
+            out[(y * nw + x) as usize] = src[(sy * w + sx) as usize];
+        }
+    }
+    out
+}
+
 /// Nearest-neighbour resize of a mask.
 pub fn resize_mask(src: &[bool], w: usize, h: usize, nw: usize, nh: usize) -> Vec<bool> {
     (0..nw * nh)

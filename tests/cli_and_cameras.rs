@@ -6,6 +6,7 @@ mod common;
 use cogeo::render::reference::render_reference;
 use cogeo::scene::camera::{read_cameras_json, write_cameras_json};
 use cogeo::scene::colmap::read_colmap;
+use cogeo::scene::lens::Lens;
 use cogeo::scene::ply::{encode_ply, write_ply};
 use cogeo::scene::{Camera, GaussianScene};
 use common::{random_scene, test_camera, SceneMix};
@@ -273,7 +274,10 @@ fn colmap_binary_and_text_agree() {
     assert_eq!(a.cameras.len(), 2);
     assert_eq!(a.cameras[0].name, "a"); // sorted by name
     assert_eq!((a.cameras[1].fx, a.cameras[1].fy, a.cameras[1].cx), (300.0, 300.0, 160.0));
-    assert_eq!(a.warnings.len(), 1, "SIMPLE_RADIAL warns that distortion is ignored");
+    // the SIMPLE_RADIAL camera keeps its lens (undistorted on load, scene/undistort.rs)
+    assert_eq!(a.lenses, b.lenses);
+    assert_eq!(a.lenses, vec![Lens::Pinhole, Lens::Radial { k1: 0.01, k2: 0.0 }]);
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
     assert_eq!(b.points.len(), 1);
     assert_eq!(a.points[0].xyz, b.points[0].xyz);
     assert_eq!(a.points[0].rgb, [255, 128, 0]);

@@ -53,6 +53,7 @@ fn synth(dir: &std::path::Path, width: u32, height: u32, supersample: u32) {
         points_per_view: 20,
         gt_without: Vec::new(),
         supersample,
+        distortion: [0.0; 4],
     };
     generate(&cfg, dir, &|_, _| {}).unwrap();
 }

@@ -16,6 +16,7 @@ fn config() -> SynthConfig {
         points_per_view: 10,
         gt_without: Vec::new(),
         supersample: 3,
+        distortion: [0.0; 4],
     }
 }
 

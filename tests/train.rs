@@ -134,7 +134,7 @@ fn one_view_scene(
     let camera = Camera::look_at("v", 40, 30, 60.0, [0.0, -0.2, -3.0], [0.0; 3], [0.0, -1.0, 0.0]);
     let image: Vec<f32> = (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect();
     let data = Dataset {
-        train: vec![View { camera, image, path: "t".into() }],
+        train: vec![View { camera, image, path: "t".into(), undistortion: None }],
         test: vec![],
         points: vec![],
         extent: 2.0,
@@ -237,6 +237,7 @@ fn fused_step_matches_the_passes_apart() {
         camera: Camera::look_at(name, 40, 30, 60.0, eye, [0.0; 3], [0.0, -1.0, 0.0]),
         image: (0..3 * 40 * 30).map(|_| rng.uniform() as f32).collect(),
         path: name.into(),
+        undistortion: None,
     };
     let train = vec![view("a", [0.0, -0.2, -3.0], &mut rng), view("b", [0.8, -0.4, -2.8], &mut rng)];
     let data = Dataset { train, test: vec![], points: vec![], extent: 2.0, warnings: vec![], pose_check: None };

@@ -138,7 +138,23 @@ pub fn run(a: RenderArgs) -> Result<()> {
         for w in &model.warnings {
             eprintln!("warning: {w}");
         }
-        model.cameras
+        // cogeo trains on the photos undistorted into pinhole cameras: render those
+        let lenses = model.lenses.iter().filter(|l| !l.is_pinhole()).count();
+        if lenses > 0 {
+            eprintln!(
+                "{lenses} of {} cameras have lens distortion: rendering their undistorted pinhole cameras (the \
+                 frame cogeo trains in), not the distorted photos",
+                model.cameras.len()
+            );
+        }
+        model
+            .cameras
+            .iter()
+            .zip(&model.lenses)
+            .map(|(c, &lens)| {
+                cogeo::scene::undistort::pinhole_camera(c, lens, &format!("{}: {}", dir.display(), c.name))
+            })
+            .collect::<Result<Vec<_>>>()?
     };
     let cameras = if a.builtin { cameras } else { resize_cameras(cameras, a.width, a.height)? };
     if a.features && scene.feature_matrix("f_obj_").is_none() {

@@ -1,7 +1,7 @@
 //! `cogeo synth`: a procedural dataset with exact removal ground truth.
 
 use super::args::progress;
-use anyhow::Result;
+use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -42,9 +42,19 @@ pub struct SynthArgs {
     /// through the pixel center. Depth, masks and points always use the center ray.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=16))]
     pub supersample: u32,
+    /// Lens distortion of every view, k1,k2,p1,p2 (COLMAP's OPENCV model): the images, masks and
+    /// ground truth are ray-cast through that lens, as a phone's photos are, and cameras.txt says
+    /// OPENCV. Default: a pinhole.
+    #[arg(long, value_delimiter = ',', num_args = 1, allow_negative_numbers = true, value_name = "K1,K2,P1,P2")]
+    pub distortion: Vec<f64>,
 }
 
 pub fn run(a: SynthArgs) -> Result<()> {
+    let distortion = match a.distortion[..] {
+        [] => [0.0; 4],
+        [k1, k2, p1, p2] if a.distortion.iter().all(|v| v.is_finite()) => [k1, k2, p1, p2],
+        _ => bail!("--distortion takes four finite numbers k1,k2,p1,p2, got {:?}", a.distortion),
+    };
     let cfg = cogeo::synth::SynthConfig {
         width: a.width,
         height: a.height,
@@ -55,6 +65,7 @@ pub fn run(a: SynthArgs) -> Result<()> {
         points_per_view: a.points_per_view.unwrap_or((a.width * a.height / 12) as usize),
         gt_without: a.gt_without.clone(),
         supersample: a.supersample,
+        distortion,
     };
     let bar = progress(2 * a.views, "synth");
     let objects = cogeo::synth::generate(&cfg, &a.out, &|done, _| bar.set_position(done as u64))?;

@@ -62,7 +62,7 @@ pub fn run(a: TagArgs) -> Result<()> {
     let (masks, maps) = match &a.masks {
         Some(m) => {
             let masks = if m.is_dir() || m.is_absolute() { m.clone() } else { a.data.join(m) };
-            let maps = labels::load(&masks, &train_cams)?;
+            let maps = labels::load(&masks, &data.train.iter().collect::<Vec<_>>())?;
             (masks, maps)
         }
         None => {
@@ -140,7 +140,7 @@ pub fn run(a: TagArgs) -> Result<()> {
         (0..maps.classes()).map(|q| tagged.tags.labels.iter().filter(|&&l| l as usize == q).count()).collect();
     // held-out evaluation where masks for the test views exist
     let test_cams: Vec<&Camera> = data.test.iter().map(|v| &v.camera).collect();
-    let held_out = match labels::load(&masks, &test_cams) {
+    let held_out = match labels::load(&masks, &data.test.iter().collect::<Vec<_>>()) {
         Ok(truth) if !test_cams.is_empty() && a.masks.is_some() => {
             let cams: Vec<Camera> = test_cams.iter().map(|c| (*c).clone()).collect();
             let (per, mean) = tag::evaluate_labels(&gpu, &scene, &tagged.tags.labels, &cams, &truth)?;

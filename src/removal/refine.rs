@@ -125,7 +125,12 @@ pub fn refine(
     let train: Vec<View> = cameras
         .iter()
         .zip(targets)
-        .map(|(c, image)| View { camera: c.clone(), image, path: format!("<completed {}>", c.name).into() })
+        .map(|(c, image)| View {
+            camera: c.clone(),
+            image,
+            path: format!("<completed {}>", c.name).into(),
+            undistortion: None,
+        })
         .collect();
     let data = Dataset { train, test: Vec::new(), points: Vec::new(), extent, warnings: Vec::new(), pose_check: None };
     let tcfg = TrainConfig {

@@ -1,20 +1,18 @@
 //! COLMAP sparse models (`cameras`, `images`, `points3D`; `.bin` or `.txt`).
 
 use super::camera::{rotation_from_qvec, Camera};
+use super::lens::{parameter_count, ColmapIntrinsics, Lens};
 use anyhow::{anyhow, bail, Context, Result};
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 
-/// Intrinsics of one COLMAP camera, reduced to a pinhole.
+/// One COLMAP camera: its image size, focal lengths, principal point and lens.
 #[derive(Clone, Debug)]
 struct Intrinsics {
     width: u32,
     height: u32,
-    fx: f64,
-    fy: f64,
-    cx: f64,
-    cy: f64,
+    k: ColmapIntrinsics,
 }
 
 /// A sparse point (for initializing training).
@@ -26,7 +24,11 @@ pub struct Point3D {
 
 /// A loaded COLMAP model: cameras sorted by image name, and the sparse points.
 pub struct ColmapModel {
+    /// Each image's camera as COLMAP stores it: with a lens other than the pinhole, its focal
+    /// lengths and principal point apply to the distorted photo (`lenses`).
     pub cameras: Vec<Camera>,
+    /// Each camera's lens distortion (same order); scene/undistort.rs resamples the photos.
+    pub lenses: Vec<Lens>,
     pub points: Vec<Point3D>,
     pub warnings: Vec<String>,
 }
@@ -41,53 +43,27 @@ pub fn find_model_dir(dir: &Path) -> Result<PathBuf> {
     bail!("{}: no COLMAP model (cameras.bin/.txt) here or in sparse/0", dir.display())
 }
 
-/// Number of parameters of a COLMAP camera model id, and its name.
+/// The name of a COLMAP camera model id (the binary format's), with its parameter count.
 fn model_info(id: i32) -> Option<(&'static str, usize)> {
-    Some(match id {
-        0 => ("SIMPLE_PINHOLE", 3),
-        1 => ("PINHOLE", 4),
-        2 => ("SIMPLE_RADIAL", 4),
-        3 => ("RADIAL", 5),
-        4 => ("OPENCV", 8),
-        5 => ("OPENCV_FISHEYE", 8),
-        6 => ("FULL_OPENCV", 12),
-        7 => ("FOV", 5),
-        8 => ("SIMPLE_RADIAL_FISHEYE", 4),
-        9 => ("RADIAL_FISHEYE", 5),
-        10 => ("THIN_PRISM_FISHEYE", 12),
+    let name = match id {
+        0 => "SIMPLE_PINHOLE",
+        1 => "PINHOLE",
+        2 => "SIMPLE_RADIAL",
+        3 => "RADIAL",
+        4 => "OPENCV",
+        5 => "OPENCV_FISHEYE",
+        6 => "FULL_OPENCV",
+        7 => return Some(("FOV", 5)),
+        8 => "SIMPLE_RADIAL_FISHEYE",
+        9 => "RADIAL_FISHEYE",
+        10 => "THIN_PRISM_FISHEYE",
         _ => return None,
-    })
+    };
+    Some((name, parameter_count(name)?))
 }
 
-fn to_pinhole(
-    what: &str,
-    model: &str,
-    width: u32,
-    height: u32,
-    p: &[f64],
-    warnings: &mut Vec<String>,
-) -> Result<Intrinsics> {
-    let (fx, fy, cx, cy) = match model {
-        "SIMPLE_PINHOLE" | "SIMPLE_RADIAL" | "RADIAL" if p.len() >= 3 => (p[0], p[0], p[1], p[2]),
-        "PINHOLE" | "OPENCV" | "FULL_OPENCV" if p.len() >= 4 => (p[0], p[1], p[2], p[3]),
-        "SIMPLE_PINHOLE" | "SIMPLE_RADIAL" | "RADIAL" | "PINHOLE" | "OPENCV" | "FULL_OPENCV" => {
-            bail!("{what}: camera model {model} with too few parameters ({})", p.len())
-        }
-        _ => bail!(
-            "{what}: unknown or unsupported camera model {model:?} (supported: PINHOLE, SIMPLE_PINHOLE; \
-             SIMPLE_RADIAL, RADIAL, OPENCV, FULL_OPENCV with distortion ignored)"
-        ),
-    };
-    if !matches!(model, "PINHOLE" | "SIMPLE_PINHOLE") {
-        let w = format!("{what}: camera model {model}: distortion is ignored; undistort the images for best results");
-        if !warnings.contains(&w) {
-            warnings.push(w);
-        }
-    }
-    if !(fx.is_finite() && fy.is_finite() && fx > 0.0 && fy > 0.0 && cx.is_finite() && cy.is_finite()) {
-        bail!("{what}: camera with invalid intrinsics (fx {fx}, fy {fy}, cx {cx}, cy {cy})");
-    }
-    Ok(Intrinsics { width, height, fx, fy, cx, cy })
+fn intrinsics(what: &str, model: &str, width: u32, height: u32, p: &[f64]) -> Result<Intrinsics> {
+    Ok(Intrinsics { width, height, k: ColmapIntrinsics::from_colmap(model, p, what)? })
 }
 
 struct Bin<'a> {
@@ -164,7 +140,7 @@ pub struct ModelFile<'a> {
     pub what: &'a str,
 }
 
-fn parse_cameras(f: &ModelFile, warnings: &mut Vec<String>) -> Result<HashMap<i64, Intrinsics>> {
+fn parse_cameras(f: &ModelFile) -> Result<HashMap<i64, Intrinsics>> {
     let what = f.what;
     let mut out = HashMap::new();
     if f.text {
@@ -184,7 +160,7 @@ fn parse_cameras(f: &ModelFile, warnings: &mut Vec<String>) -> Result<HashMap<i6
             let height = image_side(w[3].parse().map_err(|_| parse_err())?, &at)?;
             let params: Vec<f64> =
                 w[4..].iter().map(|s| s.parse()).collect::<Result<_, _>>().map_err(|_| parse_err())?;
-            if out.insert(id, to_pinhole(&at, w[1], width, height, &params, warnings)?).is_some() {
+            if out.insert(id, intrinsics(&at, w[1], width, height, &params)?).is_some() {
                 bail!("{at}: camera id {id} appears twice");
             }
         }
@@ -199,7 +175,7 @@ fn parse_cameras(f: &ModelFile, warnings: &mut Vec<String>) -> Result<HashMap<i6
             let width = image_side(b.u64()?, what)?;
             let height = image_side(b.u64()?, what)?;
             let params: Vec<f64> = (0..np).map(|_| b.f64()).collect::<Result<_>>()?;
-            if out.insert(id, to_pinhole(what, model, width, height, &params, warnings)?).is_some() {
+            if out.insert(id, intrinsics(what, model, width, height, &params)?).is_some() {
                 bail!("{what}: camera id {id} appears twice");
             }
         }
@@ -332,8 +308,7 @@ pub fn parse_colmap(
     points: Option<&ModelFile>,
     what: &str,
 ) -> Result<ColmapModel> {
-    let mut warnings = Vec::new();
-    let intrinsics = parse_cameras(cameras, &mut warnings)?;
+    let intrinsics = parse_cameras(cameras)?;
     let mut images = parse_images(images)?;
     if images.is_empty() {
         bail!("{what}: the COLMAP model has no images");
@@ -342,7 +317,7 @@ pub fn parse_colmap(
     if let Some(w) = images.windows(2).find(|w| w[0].name == w[1].name) {
         bail!("{what}: image {:?} appears twice", w[0].name);
     }
-    let cameras = images
+    let (cameras, lenses): (Vec<Camera>, Vec<Lens>) = images
         .iter()
         .map(|im| {
             let k = intrinsics
@@ -353,17 +328,19 @@ pub fn parse_colmap(
                 name: stem,
                 width: k.width,
                 height: k.height,
-                fx: k.fx,
-                fy: k.fy,
-                cx: k.cx,
-                cy: k.cy,
+                fx: k.k.fx,
+                fy: k.k.fy,
+                cx: k.k.cx,
+                cy: k.k.cy,
                 rotation: rotation_from_qvec(im.qvec),
                 translation: im.tvec,
             };
             camera.check(&format!("{what}: image {:?}", im.name))?;
-            Ok(camera)
+            Ok((camera, k.k.lens))
         })
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
     let points = points.map(parse_points).transpose()?.unwrap_or_default();
-    Ok(ColmapModel { cameras, points, warnings })
+    Ok(ColmapModel { cameras, lenses, points, warnings: Vec::new() })
 }

@@ -4,17 +4,41 @@
 //! factor N box-filters every image by N x N pixels on load (as `-r N` in the INRIA code), so a
 //! capture can be trained, tagged and edited at a lower resolution without writing a copy of it.
 
+use crate::image_ops::resize_nearest_u8;
 use crate::scene::colmap::{read_colmap, ColmapModel, Point3D};
+use crate::scene::lens::ColmapIntrinsics;
 use crate::scene::pose_check::{check_rotations, with_transposed_rotation, RotationCheck};
+use crate::scene::undistort::Undistortion;
 use crate::scene::Camera;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 pub struct View {
+    /// A pinhole camera: with a lens, the undistorted one.
     pub camera: Camera,
     /// Planar RGB in [0, 1], width * height per plane.
     pub image: Vec<f32>,
     pub path: PathBuf,
+    /// How the photo (and so every mask drawn on it) was resampled into `camera`'s frame, for a
+    /// camera with a lens (then `camera.width` x `height` may also be smaller, by --downscale).
+    pub undistortion: Option<Arc<Undistortion>>,
+}
+
+impl View {
+    /// A label map drawn on this view's stored photo (any size: nearest-resized), in the view's
+    /// own frame: undistorted and at the camera's size.
+    pub fn label_map(&self, stored: &[u8], w: u32, h: u32) -> Vec<u8> {
+        let (cw, ch) = (self.camera.width, self.camera.height);
+        match &self.undistortion {
+            None => resize_nearest_u8(stored, w, h, cw, ch),
+            Some(u) => {
+                let (sw, sh) = u.source;
+                let undistorted = u.labels(&resize_nearest_u8(stored, w, h, sw, sh));
+                resize_nearest_u8(&undistorted, u.pinhole.width, u.pinhole.height, cw, ch)
+            }
+        }
+    }
 }
 
 pub struct Dataset {
@@ -135,7 +159,7 @@ pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
     let pose_check = repair_rotations(&mut model, dir, &image_dir)?;
     let mut train = Vec::new();
     let mut test = Vec::new();
-    for (i, cam) in model.cameras.iter().enumerate() {
+    for (i, (cam, lens)) in model.cameras.iter().zip(&model.lenses).enumerate() {
         let path = find_image(&image_dir, &cam.name).with_context(|| {
             format!("{}: no image named {}.png/.jpg for a COLMAP view", image_dir.display(), cam.name)
         })?;
@@ -155,7 +179,16 @@ pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
         } else {
             cam.clone()
         };
+        // a lens: the photo resampled once into a pinhole camera of its size (scene/undistort.rs)
+        let (camera, rgb, undistortion) = if lens.is_pinhole() {
+            (camera, rgb, None)
+        } else {
+            let k = ColmapIntrinsics { fx: camera.fx, fy: camera.fy, cx: camera.cx, cy: camera.cy, lens: *lens };
+            let u = Undistortion::new(&k, w, h, &path.display().to_string())?;
+            (u.camera(&camera), u.rgb(&rgb), Some(Arc::new(u)))
+        };
         let (camera, rgb) = if downscale > 1 {
+            let (w, h) = (camera.width, camera.height);
             let (dw, dh, small) = box_downscale(w, h, &rgb, downscale);
             if dw < 8 || dh < 8 {
                 bail!("{}: {w}x{h} downscaled by {downscale} leaves {dw}x{dh} pixels", path.display());
@@ -175,7 +208,7 @@ pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
         } else {
             (camera, rgb)
         };
-        let view = View { camera, image: rgb, path };
+        let view = View { camera, image: rgb, path, undistortion };
         if is_test_view(i) {
             test.push(view);
         } else {

@@ -4,7 +4,9 @@ pub mod builtin;
 pub mod camera;
 pub mod colmap;
 pub mod dataset;
+pub mod lens;
 pub mod ply;
+pub mod undistort;
 pub mod pose_check;
 
 pub use camera::Camera;

@@ -9,6 +9,7 @@
 use crate::io::{write_atomic, write_exr, write_png, write_png_rgb};
 use crate::rng::Rng;
 use crate::scene::dataset::is_test_view;
+use crate::scene::lens::Lens;
 use crate::scene::Camera;
 use anyhow::{bail, Context, Result};
 use raycast::V3;
@@ -17,7 +18,7 @@ use std::path::Path;
 
 mod raycast;
 
-pub use raycast::{render_view, Object, Shape, ViewRender};
+pub use raycast::{render_view, render_view_through, Object, Shape, ViewRender};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 pub enum Rig {
@@ -45,6 +46,21 @@ pub struct SynthConfig {
     /// only, which aliases fine texture differently in every view). Depth, labels and points stay
     /// at the pixel center.
     pub supersample: u32,
+    /// Lens distortion k1, k2, p1, p2 of every view (COLMAP's OPENCV model; all 0: a pinhole):
+    /// the photos, masks and ground truth are ray-cast through it, and the model says OPENCV.
+    pub distortion: [f64; 4],
+}
+
+impl SynthConfig {
+    /// The views' lens.
+    pub fn lens(&self) -> Lens {
+        let [k1, k2, p1, p2] = self.distortion;
+        if self.distortion == [0.0; 4] {
+            Lens::Pinhole
+        } else {
+            Lens::OpenCv { k: [k1, k2, 0.0, 0.0, 0.0, 0.0], p: [p1, p2] }
+        }
+    }
 }
 
 /// Where a synth dataset keeps the ground truth of removing `labels`: the scene ray-cast without
@@ -214,11 +230,12 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     let mut background = Vec::new();
     let mut without_subset = Vec::new();
     let kept: Vec<Object> = objects.iter().filter(|o| !cfg.gt_without.contains(&o.label)).cloned().collect();
+    let lens = cfg.lens();
     for (i, cam) in cameras.iter().enumerate() {
-        with_objects.push(render_view(cam, &objects, cfg.seed, cfg.supersample));
-        background.push(render_view(cam, &[], cfg.seed, cfg.supersample));
+        with_objects.push(render_view_through(cam, lens, &objects, cfg.seed, cfg.supersample));
+        background.push(render_view_through(cam, lens, &[], cfg.seed, cfg.supersample));
         if subset_dir.is_some() {
-            without_subset.push(render_view(cam, &kept, cfg.seed, cfg.supersample));
+            without_subset.push(render_view_through(cam, lens, &kept, cfg.seed, cfg.supersample));
         }
         progress(i + 1, 2 * cameras.len());
     }
@@ -234,13 +251,13 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         write_exr(&out.join(format!("depth/{name}.exr")), w, h, &[("Y", &v.depth)])?;
         write_exr(&out.join(format!("depth_background/{name}.exr")), w, h, &[("Y", &b.depth)])?;
         // background never seen: its surface point is visible (not behind an object) in no training view
-        let unseen = never_seen(&b.points, &cameras, &train, &with_objects);
+        let unseen = never_seen(&b.points, &cameras, lens, &train, &with_objects);
         write_png(&out.join(format!("unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
         if let Some(d) = &subset_dir {
             let s = &without_subset[i];
             write_png_rgb(&out.join(format!("{d}/images/{name}.png")), w, h, &s.rgb)?;
             write_exr(&out.join(format!("{d}/depth/{name}.exr")), w, h, &[("Y", &s.depth)])?;
-            let unseen = never_seen(&s.points, &cameras, &train, &with_objects);
+            let unseen = never_seen(&s.points, &cameras, lens, &train, &with_objects);
             write_png(&out.join(format!("{d}/unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
         }
         progress(cameras.len() + i + 1, 2 * cameras.len());
@@ -253,13 +270,12 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
 }
 
 /// 255 where the surface point of a pixel is visible in no training view of the full scene.
-fn never_seen(points: &[V3], cameras: &[Camera], train: &[usize], with_objects: &[ViewRender]) -> Vec<u8> {
+fn never_seen(points: &[V3], cameras: &[Camera], lens: Lens, train: &[usize], with_objects: &[ViewRender]) -> Vec<u8> {
     points
         .iter()
         .map(|&point| {
             let seen = train.iter().any(|&t| {
-                let tc = &cameras[t];
-                let Some((q, z)) = tc.pixel_of(point) else { return false };
+                let Some((q, z)) = pixel_through(&cameras[t], lens, point) else { return false };
                 (with_objects[t].depth[q] as f64 - z).abs() <= 0.02 * z
             });
             if seen {
@@ -271,6 +287,18 @@ fn never_seen(points: &[V3], cameras: &[Camera], train: &[usize], with_objects: 
         .collect()
 }
 
+/// The pixel (row-major index) that camera `cam` with `lens` images `point` at, and its view depth.
+fn pixel_through(cam: &Camera, lens: Lens, point: V3) -> Option<(usize, f64)> {
+    let pc = cam.to_camera(point);
+    if pc[2] <= 1e-6 {
+        return None;
+    }
+    let (x, y) = lens.distort(pc[0] / pc[2], pc[1] / pc[2]);
+    let (px, py) = (cam.fx * x + cam.cx, cam.fy * y + cam.cy);
+    let inside = px >= 0.0 && py >= 0.0 && px < cam.width as f64 && py < cam.height as f64;
+    inside.then(|| (py as usize * cam.width as usize + px as usize, pc[2]))
+}
+
 fn write_colmap(
     cfg: &SynthConfig,
     cameras: &[Camera],
@@ -280,8 +308,14 @@ fn write_colmap(
     rng: &mut Rng,
 ) -> Result<()> {
     let c0 = &cameras[0];
-    let cams =
-        format!("# Camera list\n1 PINHOLE {} {} {} {} {} {}\n", cfg.width, cfg.height, c0.fx, c0.fy, c0.cx, c0.cy);
+    let (w, h) = (cfg.width, cfg.height);
+    let cams = match cfg.lens() {
+        Lens::Pinhole => format!("# Camera list\n1 PINHOLE {w} {h} {} {} {} {}\n", c0.fx, c0.fy, c0.cx, c0.cy),
+        _ => {
+            let [k1, k2, p1, p2] = cfg.distortion;
+            format!("# Camera list\n1 OPENCV {w} {h} {} {} {} {} {k1} {k2} {p1} {p2}\n", c0.fx, c0.fy, c0.cx, c0.cy)
+        }
+    };
     write_atomic(&out.join("sparse/0/cameras.txt"), |w| w.write_all(cams.as_bytes()).map_err(Into::into))?;
     let mut images =
         String::from("# Image list: IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME, then an empty points line\n");

@@ -3,6 +3,7 @@
 //! light, traced exactly per ray on the CPU. It shares nothing with the Gaussian renderer, so the
 //! images it makes are an independent ground truth.
 
+use crate::scene::lens::Lens;
 use crate::scene::Camera;
 
 pub(crate) type V3 = [f64; 3];
@@ -224,6 +225,12 @@ pub struct ViewRender {
 /// Ray-casts one camera: depth, label and surface point at each pixel center, color as the mean of
 /// `supersample`^2 rays spread evenly over the pixel (1: the center ray only).
 pub fn render_view(cam: &Camera, objects: &[Object], seed: u64, supersample: u32) -> ViewRender {
+    render_view_through(cam, Lens::Pinhole, objects, seed, supersample)
+}
+
+/// `render_view` through a camera with `lens`: each pixel position's ray is the one the lens
+/// images there (the lens model inverted, scene/lens.rs), as a real photo's is.
+pub fn render_view_through(cam: &Camera, lens: Lens, objects: &[Object], seed: u64, supersample: u32) -> ViewRender {
     let s = supersample.max(1);
     let (w, h) = (cam.width as usize, cam.height as usize);
     let center = cam.center();
@@ -240,8 +247,9 @@ pub fn render_view(cam: &Camera, objects: &[Object], seed: u64, supersample: u32
                     labels: vec![0; w],
                 };
                 let ray = |px: f64, py: f64| {
-                    let cx = (px - cam.cx) / cam.fx;
-                    let cy = (py - cam.cy) / cam.fy;
+                    let (cx, cy) = lens
+                        .undistort((px - cam.cx) / cam.fx, (py - cam.cy) / cam.fy)
+                        .expect("the synth's lens inverts across the image");
                     // camera ray (cx, cy, 1) to world: R^T
                     let dc = [cx, cy, 1.0];
                     norm([

@@ -7,8 +7,7 @@
 //!
 //! Masks whose size differs from the view's image are resized with nearest-neighbour sampling.
 
-use crate::scene::dataset::find_image;
-use crate::scene::Camera;
+use crate::scene::dataset::{find_image, View};
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
@@ -30,11 +29,6 @@ impl LabelMaps {
     }
 }
 
-fn read_gray(path: &Path, width: u32, height: u32) -> Result<Vec<u8>> {
-    let data = std::fs::read(path).with_context(|| format!("{}: cannot read mask", path.display()))?;
-    decode_mask(&data, &path.display().to_string(), width, height)
-}
-
 /// A mask or label image's bytes as one 8-bit channel at `width` x `height` (nearest-neighbour
 /// resized when its own size differs). `what` names the file in errors.
 pub fn decode_mask(data: &[u8], what: &str, width: u32, height: u32) -> Result<Vec<u8>> {
@@ -43,19 +37,7 @@ pub fn decode_mask(data: &[u8], what: &str, width: u32, height: u32) -> Result<V
     if w == 0 || h == 0 {
         bail!("{what}: the mask is empty ({w}x{h})");
     }
-    if (w, h) == (width, height) {
-        return Ok(img.into_raw());
-    }
-    // nearest neighbour, pixel centers mapped to pixel centers
-    let mut out = vec![0u8; (width * height) as usize];
-    for y in 0..height {
-        let sy = (((y as f64 + 0.5) * h as f64 / height as f64) as u32).min(h - 1);
-        for x in 0..width {
-            let sx = (((x as f64 + 0.5) * w as f64 / width as f64) as u32).min(w - 1);
-            out[(y * width + x) as usize] = img.get_pixel(sx, sy)[0];
-        }
-    }
-    Ok(out)
+    Ok(crate::image_ops::resize_nearest_u8(&img.into_raw(), w, h, width, height))
 }
 
 fn mask_path(dir: &Path, view: &str) -> Result<PathBuf> {
@@ -74,19 +56,30 @@ fn object_folders(dir: &Path) -> Result<Vec<PathBuf>> {
     Ok(dirs)
 }
 
-/// Loads the label maps of `cameras` (their names are the image stems) from `dir`, detecting the
-/// layout: subfolders = per-object binary masks, otherwise instance maps.
-pub fn load(dir: &Path, cameras: &[&Camera]) -> Result<LabelMaps> {
+/// Loads the label maps of `views` (their cameras' names are the image stems) from `dir`,
+/// detecting the layout: subfolders = per-object binary masks, otherwise instance maps. Masks are
+/// drawn on the stored photos: each is brought into its view's frame (undistorted, resized).
+pub fn load(dir: &Path, views: &[&View]) -> Result<LabelMaps> {
     if !dir.is_dir() {
         bail!("{}: mask folder not found", dir.display());
     }
-    let stem = |c: &Camera| c.name.clone();
+    let stem = |v: &View| v.camera.name.clone();
+    let read_gray = |path: &Path, v: &View| -> Result<Vec<u8>> {
+        let data = std::fs::read(path).with_context(|| format!("{}: cannot read mask", path.display()))?;
+        let what = path.display().to_string();
+        let img = crate::io::decode_image(&data, &what)?.to_luma8();
+        let (w, h) = img.dimensions();
+        if w == 0 || h == 0 {
+            bail!("{what}: the mask is empty ({w}x{h})");
+        }
+        Ok(v.label_map(&img.into_raw(), w, h))
+    };
     let folders = object_folders(dir)?;
     if folders.is_empty() {
         let mut maps = Vec::new();
         let mut max = 0u8;
-        for c in cameras {
-            let m = read_gray(&mask_path(dir, &stem(c))?, c.width, c.height)?;
+        for v in views {
+            let m = read_gray(&mask_path(dir, &stem(v))?, v)?;
             max = max.max(m.iter().copied().filter(|&v| v != IGNORE).max().unwrap_or(0));
             maps.push(m);
         }
@@ -97,10 +90,10 @@ pub fn load(dir: &Path, cameras: &[&Camera]) -> Result<LabelMaps> {
         bail!("{}: {} object folders; at most 254 objects are supported", dir.display(), folders.len());
     }
     let mut maps = Vec::new();
-    for c in cameras {
-        let mut map = vec![0u8; (c.width * c.height) as usize];
+    for v in views {
+        let mut map = vec![0u8; (v.camera.width * v.camera.height) as usize];
         for (q, f) in folders.iter().enumerate() {
-            let m = read_gray(&mask_path(f, &stem(c))?, c.width, c.height)?;
+            let m = read_gray(&mask_path(f, &stem(v))?, v)?;
             for (o, v) in map.iter_mut().zip(m) {
                 if v != 0 {
                     *o = q as u8 + 1;

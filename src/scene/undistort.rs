@@ -1,0 +1,156 @@
+//! Undistortion on load: a photo taken through a lens (scene/lens.rs) is resampled once into a
+//! pinhole camera, so every later stage (training, tagging, the removal's color transfer between
+//! views) sees straight lines straight and one surface point at the same ray in every view.
+//!
+//! The pinhole is chosen as COLMAP's undistorter does by default: the same focal lengths (so the
+//! image center keeps its scale and is only shifted, not resampled to another size), and the
+//! largest axis-aligned rectangle of the image plane that the photo saw everywhere (no black
+//! borders), which makes the image a little smaller than the photo. The rectangle's edges are the
+//! innermost points of the photo's four edges after undistortion, shrunk until every border pixel
+//! of the pinhole image reads inside the photo. Photos are read with Lanczos-3 (sharp; the
+//! resampling happens once), label maps with the nearest pixel.
+
+use super::camera::Camera;
+use super::lens::{ColmapIntrinsics, Lens};
+use crate::image_ops::sample_lanczos3;
+use anyhow::{bail, Result};
+
+/// The pinhole camera a photo is undistorted into: its size and intrinsics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pinhole {
+    pub width: u32,
+    pub height: u32,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+/// How one photo becomes its pinhole image.
+#[derive(Clone, Debug)]
+pub struct Undistortion {
+    /// The photo's size.
+    pub source: (u32, u32),
+    pub pinhole: Pinhole,
+    /// Per pinhole pixel (row-major), where its ray lands in the photo (pixel centers at +0.5).
+    map: Vec<[f64; 2]>,
+}
+
+impl Undistortion {
+    /// The undistortion of a `width` x `height` photo with intrinsics `k`; `what` names it in
+    /// errors.
+    pub fn new(k: &ColmapIntrinsics, width: u32, height: u32, what: &str) -> Result<Undistortion> {
+        let p = pinhole_for(k, width, height, what)?;
+        let (pw, ph) = (p.width as usize, p.height as usize);
+        let map = (0..pw * ph)
+            .map(|i| {
+                let (px, py) = ((i % pw) as f64 + 0.5, (i / pw) as f64 + 0.5);
+                let (x, y) = k.project((px - p.cx) / p.fx, (py - p.cy) / p.fy);
+                [x, y]
+            })
+            .collect();
+        Ok(Undistortion { source: (width, height), pinhole: p, map })
+    }
+
+    /// `distorted` (the photo's camera: its pose and name) as the pinhole camera of the
+    /// undistorted image.
+    pub fn camera(&self, distorted: &Camera) -> Camera {
+        self.pinhole.camera(distorted)
+    }
+
+    /// The photo (planar RGB at the source size) resampled into the pinhole image.
+    pub fn rgb(&self, photo: &[f32]) -> Vec<f32> {
+        let (w, h) = (self.source.0 as usize, self.source.1 as usize);
+        let n = self.map.len();
+        let mut out = vec![0f32; 3 * n];
+        for c in 0..3 {
+            for (o, p) in out[c * n..(c + 1) * n].iter_mut().zip(&self.map) {
+                *o = sample_lanczos3(photo, w, h, c, p[0], p[1]).clamp(0.0, 1.0);
+            }
+        }
+        out
+    }
+
+    /// A label map (one byte per pixel at the source size) resampled by the nearest pixel.
+    pub fn labels(&self, map: &[u8]) -> Vec<u8> {
+        let (w, h) = (self.source.0 as usize, self.source.1 as usize);
+        self.map
+            .iter()
+            .map(|p| {
+                let x = (p[0].floor().max(0.0) as usize).min(w - 1);
+                let y = (p[1].floor().max(0.0) as usize).min(h - 1);
+                map[y * w + x]
+            })
+            .collect()
+    }
+}
+
+impl Pinhole {
+    /// `distorted` (pose and name) with this pinhole's size and intrinsics.
+    pub fn camera(&self, distorted: &Camera) -> Camera {
+        let Pinhole { width, height, fx, fy, cx, cy } = *self;
+        Camera { width, height, fx, fy, cx, cy, ..distorted.clone() }
+    }
+}
+
+/// The pinhole a `width` x `height` photo with intrinsics `k` is undistorted into.
+pub fn pinhole_for(k: &ColmapIntrinsics, width: u32, height: u32, what: &str) -> Result<Pinhole> {
+    let (w, h) = (width as f64, height as f64);
+    let edge = |n: u32| (0..=n).map(move |i| i as f64);
+    let ray = |x: f64, y: f64| k.unproject(x, y);
+    let inner = |pts: Vec<Option<(f64, f64)>>, pick: fn((f64, f64)) -> f64, max: bool| {
+        let vals = pts.into_iter().flatten().map(pick);
+        if max {
+            vals.fold(f64::NEG_INFINITY, f64::max)
+        } else {
+            vals.fold(f64::INFINITY, f64::min)
+        }
+    };
+    let mut left = inner(edge(height).map(|y| ray(0.0, y)).collect(), |p| p.0, true);
+    let mut right = inner(edge(height).map(|y| ray(w, y)).collect(), |p| p.0, false);
+    let mut top = inner(edge(width).map(|x| ray(x, 0.0)).collect(), |p| p.1, true);
+    let mut bottom = inner(edge(width).map(|x| ray(x, h)).collect(), |p| p.1, false);
+    if !(left.is_finite() && right.is_finite() && top.is_finite() && bottom.is_finite())
+        || left >= right
+        || top >= bottom
+    {
+        bail!("{what}: the lens model cannot be inverted along the image border");
+    }
+    // shrink about the rectangle's center until its whole border reads inside the photo
+    let inside = |u: f64, v: f64| {
+        let (x, y) = k.project(u, v);
+        (0.0..=w).contains(&x) && (0.0..=h).contains(&y)
+    };
+    for attempt in 0.. {
+        let border_ok = (0..=200).all(|i| {
+            let t = i as f64 / 200.0;
+            let (u, v) = (left + t * (right - left), top + t * (bottom - top));
+            inside(u, top) && inside(u, bottom) && inside(left, v) && inside(right, v)
+        });
+        if border_ok {
+            break;
+        }
+        if attempt == 100 {
+            bail!("{what}: no pinhole rectangle fits inside the photo");
+        }
+        let (cu, cv) = ((left + right) / 2.0, (top + bottom) / 2.0);
+        (left, right) = (cu + 0.99 * (left - cu), cu + 0.99 * (right - cu));
+        (top, bottom) = (cv + 0.99 * (top - cv), cv + 0.99 * (bottom - cv));
+    }
+    let (fx, fy) = (k.fx, k.fy);
+    let pw = ((right - left) * fx).floor() as u32;
+    let ph = ((bottom - top) * fy).floor() as u32;
+    if pw < 8 || ph < 8 {
+        bail!("{what}: the undistorted image would be {pw}x{ph} pixels");
+    }
+    Ok(Pinhole { width: pw, height: ph, fx, fy, cx: -left * fx, cy: -top * fy })
+}
+
+/// `distorted`, a camera with lens `lens`, as the pinhole camera its photos are undistorted into.
+pub fn pinhole_camera(distorted: &Camera, lens: Lens, what: &str) -> Result<Camera> {
+    if lens.is_pinhole() {
+        return Ok(distorted.clone());
+    }
+    let k = ColmapIntrinsics { fx: distorted.fx, fy: distorted.fy, cx: distorted.cx, cy: distorted.cy, lens };
+    Ok(pinhole_for(&k, distorted.width, distorted.height, what)?.camera(distorted))
+}

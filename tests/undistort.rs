@@ -1,0 +1,140 @@
+//! Undistortion on load (scene/undistort.rs): a synth capture ray-cast through a lens, loaded as a
+//! user's COLMAP capture would be, against the same views ray-cast through the pinhole camera the
+//! loader chose.
+
+mod common;
+
+use cogeo::scene::dataset::load;
+use cogeo::synth::{generate, render_view, Rig, SynthConfig};
+
+fn psnr_inside(a: &[f32], b: &[f32], w: usize, h: usize, border: usize) -> f64 {
+    let mut se = 0.0f64;
+    let mut n = 0usize;
+    for c in 0..3 {
+        for y in border..h - border {
+            for x in border..w - border {
+                let i = c * w * h + y * w + x;
+                se += ((a[i] - b[i]) as f64).powi(2);
+                n += 1;
+            }
+        }
+    }
+    10.0 * (n as f64 / se).log10()
+}
+
+#[test]
+fn opencv_photos_undistort_to_the_pinhole_views_at_35_db() {
+    let dir = common::scratch_dir("undistort_opencv");
+    let data = dir.join("data");
+    // 640x480: the synth's checkerboards alias at 4x4 rays per pixel, and resampling aliased
+    // texture by a fraction of a pixel costs decibels by itself (33 dB at 160x120, 34-35 at 320x240
+    // even for k1 = 0.033; the lens's own share is under 1 dB)
+    let cfg = SynthConfig {
+        width: 640,
+        height: 480,
+        views: 3,
+        objects: 2,
+        rig: Rig::Forward,
+        seed: 4,
+        points_per_view: 200,
+        gt_without: Vec::new(),
+        supersample: 4,
+        // a wide phone lens's barrel distortion: the corners move by about 50 pixels
+        distortion: [-0.08, 0.015, 0.001, -0.0015],
+    };
+    let objects = generate(&cfg, &data, &|_, _| {}).unwrap();
+    let model = cogeo::scene::colmap::read_colmap(&data).unwrap();
+    assert!(!model.lenses[0].is_pinhole());
+    let ds = load(&data, "images", 1).unwrap();
+    let mut worst = f64::INFINITY;
+    for view in ds.train.iter().chain(&ds.test) {
+        let cam = &view.camera;
+        assert!(view.undistortion.is_some(), "{}: not undistorted", cam.name);
+        // COLMAP's choice: the focal lengths kept, the image cropped to what the photo saw
+        assert_eq!((cam.fx, cam.fy), (model.cameras[0].fx, model.cameras[0].fy));
+        // barrel distortion squeezed the photo's edges: the pinhole image is a little larger
+        assert!((641..700).contains(&cam.width) && (481..530).contains(&cam.height), "{}x{}", cam.width, cam.height);
+        let truth = render_view(cam, &objects, cfg.seed, cfg.supersample);
+        let p = psnr_inside(&view.image, &truth.rgb, cam.width as usize, cam.height as usize, 8);
+        worst = worst.min(p);
+    }
+    eprintln!("undistorted photos against the pinhole ray-cast: worst view {worst:.2} dB");
+    assert!(worst >= 35.0, "worst view {worst:.2} dB");
+    // what ignoring the lens trains against: the photo read as if its camera were a pinhole
+    let cam = &model.cameras[1];
+    let raw = cogeo::scene::dataset::load_rgb(&data.join(format!("images/{}.png", cam.name))).unwrap();
+    let truth = render_view(cam, &objects, cfg.seed, cfg.supersample);
+    let ignored = psnr_inside(&raw.2, &truth.rgb, 640, 480, 8);
+    eprintln!("the same view with the distortion ignored: {ignored:.2} dB");
+    assert!(ignored < worst - 10.0, "ignoring the lens gives {ignored:.2} dB");
+}
+
+#[test]
+fn masks_follow_their_photos_into_the_pinhole_frame() {
+    let dir = common::scratch_dir("undistort_masks");
+    let data = dir.join("data");
+    let cfg = SynthConfig {
+        width: 96,
+        height: 72,
+        views: 9,
+        objects: 2,
+        rig: Rig::Forward,
+        seed: 6,
+        points_per_view: 100,
+        gt_without: Vec::new(),
+        supersample: 1,
+        distortion: [-0.15, 0.02, 0.0, 0.0],
+    };
+    let objects = generate(&cfg, &data, &|_, _| {}).unwrap();
+    let ds = load(&data, "images", 1).unwrap();
+    let views: Vec<_> = ds.train.iter().collect();
+    let maps = cogeo::tag::labels::load(&data.join("object_mask"), &views).unwrap();
+    // the instance map drawn on the distorted photo, undistorted, against the pinhole ray-cast's
+    let (mut agree, mut total) = (0usize, 0usize);
+    for (view, map) in views.iter().zip(&maps.maps) {
+        let truth = render_view(&view.camera, &objects, cfg.seed, 1);
+        for (a, b) in map.iter().zip(&truth.labels) {
+            agree += (a == b) as usize;
+            total += 1;
+        }
+    }
+    let share = agree as f64 / total as f64;
+    // the same masks read as if the photos were pinhole images
+    let model = cogeo::scene::colmap::read_colmap(&data).unwrap();
+    let (mut agree_raw, mut total_raw) = (0usize, 0usize);
+    for cam in model.cameras.iter().filter(|c| ds.train.iter().any(|v| v.camera.name == c.name)) {
+        let stored = cogeo::tag::labels::decode_mask(
+            &std::fs::read(data.join(format!("object_mask/{}.png", cam.name))).unwrap(),
+            "mask",
+            cam.width,
+            cam.height,
+        )
+        .unwrap();
+        let pinhole_truth = render_view(
+            &cogeo::scene::undistort::pinhole_camera(cam, model.lenses[0], "t").unwrap(),
+            &objects,
+            cfg.seed,
+            1,
+        );
+        // the ignored reading pairs the stored mask, resized, with the pinhole camera's pixels
+        let resized = cogeo::image_ops::resize_nearest_u8(
+            &stored,
+            cam.width,
+            cam.height,
+            ds.train[0].camera.width,
+            ds.train[0].camera.height,
+        );
+        for (a, b) in resized.iter().zip(&pinhole_truth.labels) {
+            agree_raw += (a == b) as usize;
+            total_raw += 1;
+        }
+    }
+    let raw_share = agree_raw as f64 / total_raw as f64;
+    eprintln!(
+        "undistorted masks agree with the pinhole labels on {:.2} % of pixels, the stored ones on {:.2} %",
+        100.0 * share,
+        100.0 * raw_share
+    );
+    assert!(share > 0.99, "{share}");
+    assert!(1.0 - share < 0.5 * (1.0 - raw_share), "undistorted {share}, ignored {raw_share}");
+}
