@@ -180,8 +180,10 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     let held_out = render_held_out(&gpu, &scene, &removal.scene, &test_cams, opts.background)?;
     write_views(&out.join("test_before"), &test_cams, &held_out.before)?;
     write_views(&out.join("test_after"), &test_cams, &held_out.after)?;
-    // synth ground truth is stored at the dataset's resolution; a downscaled run is not scored
-    let scores = if a.capture.downscale == 1 {
+    // synth ground truth is stored at the dataset's resolution and in its photos' frame: a
+    // downscaled run, or one whose photos were undistorted, is not scored (yet)
+    let undistorted = data.train.iter().chain(&data.test).any(|v| v.undistortion.is_some());
+    let scores = if a.capture.downscale == 1 && !undistorted {
         score_against_synth(&a.data, &labels, &test_cams, &held_out, &cameras, v)?
     } else {
         GroundTruthScores::default()
