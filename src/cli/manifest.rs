@@ -39,7 +39,7 @@ pub struct GroundTruth {
 pub struct Entry {
     /// Output folder name under output_root; letters, digits, '.', '_' and '-'.
     pub name: String,
-    /// Capture: COLMAP model (here or in sparse/0) and image folders.
+    /// Capture: COLMAP model (here or in sparse/0) or transforms.json, and image folders.
     pub data: PathBuf,
     #[serde(default = "default_images")]
     pub images: String,
@@ -251,7 +251,7 @@ impl Entry {
         {
             bail!("name {:?}: use letters, digits, '.', '_' and '-' (it names the output folder)", self.name);
         }
-        cogeo::scene::colmap::find_model_dir(&self.data)?;
+        cogeo::scene::dataset::read_capture(&self.data)?;
         let images = self.data.join(&self.images);
         if !images.is_dir() {
             bail!("{}: image folder not found", images.display());

@@ -8,7 +8,7 @@ use cogeo::gpu::Gpu;
 use cogeo::io::{write_exr, write_png_gray, write_png_rgb};
 use cogeo::render::{RenderSettings, SceneRenderer};
 use cogeo::scene::camera::resize_cameras;
-use cogeo::scene::{camera, colmap, ply, Camera, GaussianScene};
+use cogeo::scene::{camera, ply, Camera, GaussianScene};
 use std::path::{Path, PathBuf};
 
 #[derive(Args)]
@@ -26,8 +26,10 @@ pub struct RenderArgs {
     /// INRIA cameras.json with the views to render.
     #[arg(long, conflicts_with_all = ["colmap", "builtin"], required_unless_present_any = ["colmap", "builtin"])]
     pub cameras: Option<PathBuf>,
-    /// COLMAP model folder (containing cameras/images .bin or .txt, or sparse/0 with them). Its poses
-    /// are checked against the images in `images/` beside the model when that folder exists.
+    /// Capture folder: a COLMAP model (cameras/images .bin or .txt, here or in sparse/0) or a
+    /// nerfstudio / instant-ngp transforms.json. Its poses are checked against the images in
+    /// `images/` beside the model when that folder exists; cameras with lens distortion are
+    /// rendered as the undistorted pinhole cameras cogeo trains in.
     #[arg(long, conflicts_with = "builtin")]
     pub colmap: Option<PathBuf>,
     /// Output folder (created if missing); files are written atomically.
@@ -129,7 +131,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         camera::read_cameras_json(path)?
     } else {
         let dir = a.colmap.as_ref().unwrap();
-        let mut model = colmap::read_colmap(dir)?;
+        let mut model = cogeo::scene::dataset::read_capture(dir)?;
         // the same pose check as training, against the full-size images where they are
         let image_dir = dir.join("images");
         if image_dir.is_dir() {

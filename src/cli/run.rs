@@ -12,7 +12,7 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct RunArgs {
-    /// Dataset folder: COLMAP model and images.
+    /// Dataset folder: COLMAP model (or nerfstudio transforms.json) and images.
     #[arg(long)]
     pub data: PathBuf,
     /// Masks for tagging (see `cogeo tag --masks`).

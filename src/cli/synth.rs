@@ -7,7 +7,8 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct SynthArgs {
-    /// Output folder (created; must be empty): COLMAP text model in sparse/0, images/, object_mask/,
+    /// Output folder (created; must be empty): COLMAP text model in sparse/0 and the same cameras as
+    /// a nerfstudio transforms.json (+ sparse_pc.ply), images/, object_mask/,
     /// gt_background/, depth/, depth_background/ (EXR), unseen_mask/, synth.json.
     #[arg(long)]
     pub out: PathBuf,

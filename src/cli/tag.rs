@@ -12,7 +12,8 @@ pub struct TagArgs {
     /// Trained scene (INRIA PLY), e.g. the scene.ply of `cogeo train`. Not modified.
     #[arg(long)]
     pub scene: PathBuf,
-    /// Dataset folder the scene was trained from (COLMAP model + images; cameras and the split).
+    /// Dataset folder the scene was trained from (COLMAP model or transforms.json + images; cameras
+    /// and the split).
     #[arg(long)]
     pub data: PathBuf,
     #[command(flatten)]

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct TrainArgs {
-    /// Dataset folder: COLMAP model (here or in sparse/0) and an image folder.
+    /// Dataset folder: COLMAP model (here or in sparse/0) or nerfstudio / instant-ngp transforms.json,
+    /// and an image folder.
     #[arg(long)]
     pub data: PathBuf,
     /// Output folder: scene.ply, metrics.json and checkpoint/ (created if missing).

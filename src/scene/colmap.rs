@@ -22,7 +22,9 @@ pub struct Point3D {
     pub rgb: [u8; 3],
 }
 
-/// A loaded COLMAP model: cameras sorted by image name, and the sparse points.
+/// A loaded capture model (a COLMAP model, or a transforms.json read into the same shape):
+/// cameras sorted by image name, and the sparse points.
+#[derive(Debug)]
 pub struct ColmapModel {
     /// Each image's camera as COLMAP stores it: with a lens other than the pinhole, its focal
     /// lengths and principal point apply to the distorted photo (`lenses`).

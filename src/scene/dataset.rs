@@ -5,9 +5,10 @@
 //! capture can be trained, tagged and edited at a lower resolution without writing a copy of it.
 
 use crate::image_ops::resize_nearest_u8;
-use crate::scene::colmap::{read_colmap, ColmapModel, Point3D};
+use crate::scene::colmap::{find_model_dir, read_colmap, ColmapModel, Point3D};
 use crate::scene::lens::ColmapIntrinsics;
 use crate::scene::pose_check::{check_rotations, with_transposed_rotation, RotationCheck};
+use crate::scene::transforms;
 use crate::scene::undistort::Undistortion;
 use crate::scene::Camera;
 use anyhow::{bail, Context, Result};
@@ -56,6 +57,22 @@ const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "PNG", "JPG"];
 
 /// The image folder inside a capture that every command reads unless told another.
 pub const DEFAULT_IMAGE_FOLDER: &str = "images";
+
+/// The cameras and points of a capture folder: a COLMAP model (`dir`, `dir/sparse/0`), else a
+/// nerfstudio / instant-ngp `transforms.json` (scene/transforms.rs).
+pub fn read_capture(dir: &Path) -> Result<ColmapModel> {
+    if find_model_dir(dir).is_err() && dir.join(transforms::FILE_NAME).is_file() {
+        return transforms::read_transforms(dir);
+    }
+    if find_model_dir(dir).is_err() {
+        bail!(
+            "{}: no COLMAP model (cameras.bin/.txt here or in sparse/0) and no {}",
+            dir.display(),
+            transforms::FILE_NAME
+        );
+    }
+    read_colmap(dir)
+}
 
 /// Finds `stem.<ext>` in `dir`.
 pub fn find_image(dir: &Path, stem: &str) -> Option<PathBuf> {
@@ -151,7 +168,7 @@ pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
     if downscale == 0 {
         bail!("the downscale factor must be at least 1");
     }
-    let mut model = read_colmap(dir)?;
+    let mut model = read_capture(dir)?;
     let image_dir = dir.join(images);
     if !image_dir.is_dir() {
         bail!("{}: image folder not found", image_dir.display());

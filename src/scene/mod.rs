@@ -8,6 +8,7 @@ pub mod lens;
 pub mod ply;
 pub mod undistort;
 pub mod pose_check;
+pub mod transforms;
 
 pub use camera::Camera;
 

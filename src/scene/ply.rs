@@ -105,6 +105,20 @@ pub fn read_ply(path: &Path) -> Result<GaussianScene> {
 }
 
 pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianScene> {
+    read_vertices(reader, what, true)
+}
+
+/// Reads a point-cloud PLY (x, y, z; colors such as red, green, blue and any other property land
+/// in `extras`), as the `ply_file_path` of a transforms.json capture.
+pub fn read_point_cloud(path: &Path) -> Result<GaussianScene> {
+    let file = std::fs::File::open(path).with_context(|| format!("{}: cannot open", path.display()))?;
+    let mut reader = BufReader::with_capacity(1 << 20, file);
+    read_vertices(&mut reader, &path.display().to_string(), false)
+}
+
+/// The vertices of a PLY as a scene; `gaussian`: every INRIA Gaussian property is required
+/// (otherwise only the position).
+fn read_vertices<R: BufRead>(reader: &mut R, what: &str, gaussian: bool) -> Result<GaussianScene> {
     // header
     let mut line = String::new();
     let mut next_line = |reader: &mut R| -> Result<String> {
@@ -173,12 +187,18 @@ pub fn read_ply_from<R: BufRead>(reader: &mut R, what: &str) -> Result<GaussianS
 
     // map properties to attributes
     let find = |name: &str| props.iter().position(|(p, _)| p == name);
-    for req in [
-        "x", "y", "z", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3", "f_dc_0",
-        "f_dc_1", "f_dc_2",
-    ] {
+    let required: &[&str] = if gaussian {
+        &[
+            "x", "y", "z", "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3", "f_dc_0",
+            "f_dc_1", "f_dc_2",
+        ]
+    } else {
+        &["x", "y", "z"]
+    };
+    for &req in required {
         if find(req).is_none() {
-            bail!("{what}: missing required property {req:?} (not an INRIA Gaussian PLY?)");
+            let kind = if gaussian { " (not an INRIA Gaussian PLY?)" } else { "" };
+            bail!("{what}: missing required property {req:?}{kind}");
         }
     }
     let n_rest = (0..).take_while(|i| find(&format!("f_rest_{i}")).is_some()).count();

@@ -16,6 +16,7 @@ use raycast::V3;
 use std::io::Write;
 use std::path::Path;
 
+mod capture_files;
 mod raycast;
 
 pub use raycast::{render_view, render_view_through, Object, Shape, ViewRender};
@@ -262,7 +263,8 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         }
         progress(cameras.len() + i + 1, 2 * cameras.len());
     }
-    write_colmap(cfg, &cameras, &with_objects, &train, out, &mut rng)?;
+    let points = capture_files::write_colmap(cfg, &cameras, &with_objects, &train, out, &mut rng)?;
+    capture_files::write_transforms(cfg, &cameras, &points, out)?;
     let meta = serde_json::json!({ "config": cfg, "objects": objects, "test_views": (0..cameras.len()).filter(|&i| is_test_view(i)).collect::<Vec<_>>() });
     let text = serde_json::to_string_pretty(&meta)?;
     write_atomic(&out.join("synth.json"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
@@ -297,57 +299,4 @@ fn pixel_through(cam: &Camera, lens: Lens, point: V3) -> Option<(usize, f64)> {
     let (px, py) = (cam.fx * x + cam.cx, cam.fy * y + cam.cy);
     let inside = px >= 0.0 && py >= 0.0 && px < cam.width as f64 && py < cam.height as f64;
     inside.then(|| (py as usize * cam.width as usize + px as usize, pc[2]))
-}
-
-fn write_colmap(
-    cfg: &SynthConfig,
-    cameras: &[Camera],
-    renders: &[ViewRender],
-    train: &[usize],
-    out: &Path,
-    rng: &mut Rng,
-) -> Result<()> {
-    let c0 = &cameras[0];
-    let (w, h) = (cfg.width, cfg.height);
-    let cams = match cfg.lens() {
-        Lens::Pinhole => format!("# Camera list\n1 PINHOLE {w} {h} {} {} {} {}\n", c0.fx, c0.fy, c0.cx, c0.cy),
-        _ => {
-            let [k1, k2, p1, p2] = cfg.distortion;
-            format!("# Camera list\n1 OPENCV {w} {h} {} {} {} {} {k1} {k2} {p1} {p2}\n", c0.fx, c0.fy, c0.cx, c0.cy)
-        }
-    };
-    write_atomic(&out.join("sparse/0/cameras.txt"), |w| w.write_all(cams.as_bytes()).map_err(Into::into))?;
-    let mut images =
-        String::from("# Image list: IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME, then an empty points line\n");
-    for (i, cam) in cameras.iter().enumerate() {
-        let q = qvec_from_rotation(&cam.rotation);
-        let t = cam.translation;
-        images +=
-            &format!("{} {} {} {} {} {} {} {} 1 {}.png\n\n", i + 1, q[0], q[1], q[2], q[3], t[0], t[1], t[2], cam.name);
-    }
-    write_atomic(&out.join("sparse/0/images.txt"), |w| w.write_all(images.as_bytes()).map_err(Into::into))?;
-    // sparse points: surface points seen by training views, with SfM-like noise
-    let hw = (cfg.width * cfg.height) as usize;
-    let mut points = String::from("# 3D point list: POINT3D_ID X Y Z R G B ERROR TRACK[]\n");
-    let mut id = 1;
-    for &t in train {
-        for _ in 0..cfg.points_per_view.max(4) {
-            let p = (rng.next_u64() % hw as u64) as usize;
-            let pt = renders[t].points[p];
-            let noise = 0.01;
-            let rgb: Vec<u8> = (0..3).map(|c| crate::io::to_u8(renders[t].rgb[c * hw + p])).collect();
-            points += &format!(
-                "{id} {} {} {} {} {} {} 0.5\n",
-                pt[0] + noise * rng.normal(),
-                pt[1] + noise * rng.normal(),
-                pt[2] + noise * rng.normal(),
-                rgb[0],
-                rgb[1],
-                rgb[2]
-            );
-            id += 1;
-        }
-    }
-    write_atomic(&out.join("sparse/0/points3D.txt"), |w| w.write_all(points.as_bytes()).map_err(Into::into))?;
-    Ok(())
 }
