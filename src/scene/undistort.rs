@@ -26,30 +26,23 @@ pub struct Pinhole {
     pub cy: f64,
 }
 
-/// How one photo becomes its pinhole image.
+/// How one photo becomes its pinhole image. Small: the per-pixel source positions are recomputed
+/// (closed form, the forward lens model) each time an image is resampled, so a loaded capture
+/// does not hold a map per view.
 #[derive(Clone, Debug)]
 pub struct Undistortion {
     /// The photo's size.
     pub source: (u32, u32),
+    /// The photo's intrinsics and lens.
+    pub lens: ColmapIntrinsics,
     pub pinhole: Pinhole,
-    /// Per pinhole pixel (row-major), where its ray lands in the photo (pixel centers at +0.5).
-    map: Vec<[f64; 2]>,
 }
 
 impl Undistortion {
     /// The undistortion of a `width` x `height` photo with intrinsics `k`; `what` names it in
     /// errors.
     pub fn new(k: &ColmapIntrinsics, width: u32, height: u32, what: &str) -> Result<Undistortion> {
-        let p = pinhole_for(k, width, height, what)?;
-        let (pw, ph) = (p.width as usize, p.height as usize);
-        let map = (0..pw * ph)
-            .map(|i| {
-                let (px, py) = ((i % pw) as f64 + 0.5, (i / pw) as f64 + 0.5);
-                let (x, y) = k.project((px - p.cx) / p.fx, (py - p.cy) / p.fy);
-                [x, y]
-            })
-            .collect();
-        Ok(Undistortion { source: (width, height), pinhole: p, map })
+        Ok(Undistortion { source: (width, height), lens: *k, pinhole: pinhole_for(k, width, height, what)? })
     }
 
     /// `distorted` (the photo's camera: its pose and name) as the pinhole camera of the
@@ -58,14 +51,27 @@ impl Undistortion {
         self.pinhole.camera(distorted)
     }
 
+    /// Where the ray of pinhole pixel `i` (row-major) lands in the photo (pixel centers at +0.5).
+    fn source_position(&self, i: usize) -> (f64, f64) {
+        let p = &self.pinhole;
+        let w = p.width as usize;
+        let (px, py) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+        self.lens.project((px - p.cx) / p.fx, (py - p.cy) / p.fy)
+    }
+
+    fn pixels(&self) -> usize {
+        self.pinhole.width as usize * self.pinhole.height as usize
+    }
+
     /// The photo (planar RGB at the source size) resampled into the pinhole image.
     pub fn rgb(&self, photo: &[f32]) -> Vec<f32> {
         let (w, h) = (self.source.0 as usize, self.source.1 as usize);
-        let n = self.map.len();
+        let n = self.pixels();
         let mut out = vec![0f32; 3 * n];
-        for c in 0..3 {
-            for (o, p) in out[c * n..(c + 1) * n].iter_mut().zip(&self.map) {
-                *o = sample_lanczos3(photo, w, h, c, p[0], p[1]).clamp(0.0, 1.0);
+        for i in 0..n {
+            let (x, y) = self.source_position(i);
+            for c in 0..3 {
+                out[c * n + i] = sample_lanczos3(photo, w, h, c, x, y).clamp(0.0, 1.0);
             }
         }
         out
@@ -74,11 +80,10 @@ impl Undistortion {
     /// A label map (one byte per pixel at the source size) resampled by the nearest pixel.
     pub fn labels(&self, map: &[u8]) -> Vec<u8> {
         let (w, h) = (self.source.0 as usize, self.source.1 as usize);
-        self.map
-            .iter()
-            .map(|p| {
-                let x = (p[0].floor().max(0.0) as usize).min(w - 1);
-                let y = (p[1].floor().max(0.0) as usize).min(h - 1);
+        (0..self.pixels())
+            .map(|i| {
+                let (x, y) = self.source_position(i);
+                let (x, y) = ((x.floor().max(0.0) as usize).min(w - 1), (y.floor().max(0.0) as usize).min(h - 1));
                 map[y * w + x]
             })
             .collect()
