@@ -22,6 +22,22 @@ fn psnr_inside(a: &[f32], b: &[f32], w: usize, h: usize, border: usize) -> f64 {
     10.0 * (n as f64 / se).log10()
 }
 
+/// A forward-facing synth room with two objects, `views` views of `width` x `height`.
+fn room(width: u32, height: u32, views: usize, seed: u64, supersample: u32, distortion: [f64; 4]) -> SynthConfig {
+    SynthConfig {
+        width,
+        height,
+        views,
+        objects: 2,
+        rig: Rig::Forward,
+        seed,
+        points_per_view: (width * height / 24) as usize,
+        gt_without: Vec::new(),
+        supersample,
+        distortion,
+    }
+}
+
 #[test]
 fn opencv_photos_undistort_to_the_pinhole_views_at_35_db() {
     let dir = common::scratch_dir("undistort_opencv");
@@ -29,19 +45,8 @@ fn opencv_photos_undistort_to_the_pinhole_views_at_35_db() {
     // 640x480: the synth's checkerboards alias at 4x4 rays per pixel, and resampling aliased
     // texture by a fraction of a pixel costs decibels by itself (33 dB at 160x120, 34-35 at 320x240
     // even for k1 = 0.033; the lens's own share is under 1 dB)
-    let cfg = SynthConfig {
-        width: 640,
-        height: 480,
-        views: 3,
-        objects: 2,
-        rig: Rig::Forward,
-        seed: 4,
-        points_per_view: 200,
-        gt_without: Vec::new(),
-        supersample: 4,
-        // a wide phone lens's barrel distortion: the corners move by about 50 pixels
-        distortion: [-0.08, 0.015, 0.001, -0.0015],
-    };
+    // a wide phone lens's barrel distortion: the corners move by about 50 pixels
+    let cfg = room(640, 480, 3, 4, 4, [-0.08, 0.015, 0.001, -0.0015]);
     let objects = generate(&cfg, &data, &|_, _| {}).unwrap();
     let model = cogeo::scene::colmap::read_colmap(&data).unwrap();
     assert!(!model.lenses[0].is_pinhole());
@@ -73,18 +78,7 @@ fn opencv_photos_undistort_to_the_pinhole_views_at_35_db() {
 fn masks_follow_their_photos_into_the_pinhole_frame() {
     let dir = common::scratch_dir("undistort_masks");
     let data = dir.join("data");
-    let cfg = SynthConfig {
-        width: 96,
-        height: 72,
-        views: 9,
-        objects: 2,
-        rig: Rig::Forward,
-        seed: 6,
-        points_per_view: 100,
-        gt_without: Vec::new(),
-        supersample: 1,
-        distortion: [-0.15, 0.02, 0.0, 0.0],
-    };
+    let cfg = room(96, 72, 9, 6, 1, [-0.15, 0.02, 0.0, 0.0]);
     let objects = generate(&cfg, &data, &|_, _| {}).unwrap();
     let ds = load(&data, "images", 1).unwrap();
     let views: Vec<_> = ds.train.iter().collect();
@@ -157,18 +151,7 @@ fn train_held_out_psnr(gpu: &cogeo::gpu::Gpu, data: &std::path::Path, iters: u32
 fn training_on_the_distorted_capture_matches_the_pinhole_capture() {
     let gpu = common::gpu();
     let dir = common::scratch_dir("undistort_train");
-    let mut cfg = SynthConfig {
-        width: 96,
-        height: 72,
-        views: 16,
-        objects: 2,
-        rig: Rig::Forward,
-        seed: 8,
-        points_per_view: 500,
-        gt_without: Vec::new(),
-        supersample: 4,
-        distortion: [0.0; 4],
-    };
+    let mut cfg = room(96, 72, 16, 8, 4, [0.0; 4]);
     generate(&cfg, &dir.join("pinhole"), &|_, _| {}).unwrap();
     cfg.distortion = [-0.1, 0.02, 0.001, -0.0015];
     generate(&cfg, &dir.join("opencv"), &|_, _| {}).unwrap();
