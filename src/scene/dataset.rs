@@ -1,8 +1,10 @@
-//! Training data: a COLMAP model plus an image folder (`images`, or a Mip-NeRF 360 style `images_2`,
-//! `images_4`, ... holding downscaled copies: intrinsics are scaled to the actual image size), with
-//! the Mip-NeRF 360 split (every 8th view, 0, 8, 16, ..., held out for testing). A `downscale`
-//! factor N box-filters every image by N x N pixels on load (as `-r N` in the INRIA code), so a
-//! capture can be trained, tagged and edited at a lower resolution without writing a copy of it.
+//! Training data: a COLMAP model (or a transforms.json, scene/transforms.rs) plus an image folder
+//! (`images`, or a Mip-NeRF 360 style `images_2`, `images_4`, ... holding downscaled copies:
+//! intrinsics are scaled to the actual image size), with the Mip-NeRF 360 split (every 8th view,
+//! 0, 8, 16, ..., held out for testing). Photos taken through a lens are undistorted into pinhole
+//! cameras first (scene/undistort.rs). A `downscale` factor N then box-filters every image by N x N
+//! pixels (as `-r N` in the INRIA code), so a capture can be trained, tagged and edited at a lower
+//! resolution without writing a copy of it.
 
 use crate::image_ops::resize_nearest_u8;
 use crate::scene::colmap::{find_model_dir, read_colmap, ColmapModel, Point3D};
