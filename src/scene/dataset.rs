@@ -8,7 +8,6 @@
 
 use crate::image_ops::resize_nearest_u8;
 use crate::scene::colmap::{find_model_dir, read_colmap, ColmapModel, Point3D};
-use crate::scene::lens::ColmapIntrinsics;
 use crate::scene::pose_check::{check_rotations, with_transposed_rotation, RotationCheck};
 use crate::scene::transforms;
 use crate::scene::undistort::Undistortion;
@@ -202,9 +201,8 @@ pub fn load(dir: &Path, images: &str, downscale: u32) -> Result<Dataset> {
         let (camera, rgb, undistortion) = if lens.is_pinhole() {
             (camera, rgb, None)
         } else {
-            let k = ColmapIntrinsics { fx: camera.fx, fy: camera.fy, cx: camera.cx, cy: camera.cy, lens: *lens };
-            let u = Undistortion::new(&k, w, h, &path.display().to_string())?;
-            (u.camera(&camera), u.rgb(&rgb), Some(Arc::new(u)))
+            let u = Undistortion::new(&camera, *lens, &path.display().to_string())?;
+            (u.pinhole.clone(), u.rgb(&rgb), Some(Arc::new(u)))
         };
         let (camera, rgb) = if downscale > 1 {
             let (w, h) = (camera.width, camera.height);

@@ -15,17 +15,6 @@ use super::lens::{ColmapIntrinsics, Lens};
 use crate::image_ops::sample_lanczos3;
 use anyhow::{bail, Result};
 
-/// The pinhole camera a photo is undistorted into: its size and intrinsics.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Pinhole {
-    pub width: u32,
-    pub height: u32,
-    pub fx: f64,
-    pub fy: f64,
-    pub cx: f64,
-    pub cy: f64,
-}
-
 /// How one photo becomes its pinhole image. Small: the per-pixel source positions are recomputed
 /// (closed form, the forward lens model) each time an image is resampled, so a loaded capture
 /// does not hold a map per view.
@@ -35,20 +24,17 @@ pub struct Undistortion {
     pub source: (u32, u32),
     /// The photo's intrinsics and lens.
     pub lens: ColmapIntrinsics,
-    pub pinhole: Pinhole,
+    /// The pinhole camera of the undistorted image (the photo's pose and name).
+    pub pinhole: Camera,
 }
 
 impl Undistortion {
-    /// The undistortion of a `width` x `height` photo with intrinsics `k`; `what` names it in
-    /// errors.
-    pub fn new(k: &ColmapIntrinsics, width: u32, height: u32, what: &str) -> Result<Undistortion> {
-        Ok(Undistortion { source: (width, height), lens: *k, pinhole: pinhole_for(k, width, height, what)? })
-    }
-
-    /// `distorted` (the photo's camera: its pose and name) as the pinhole camera of the
-    /// undistorted image.
-    pub fn camera(&self, distorted: &Camera) -> Camera {
-        self.pinhole.camera(distorted)
+    /// The undistortion of the photo of `distorted` (its pose, name, size and intrinsics) taken
+    /// through `lens`; `what` names it in errors.
+    pub fn new(distorted: &Camera, lens: Lens, what: &str) -> Result<Undistortion> {
+        let k = ColmapIntrinsics { fx: distorted.fx, fy: distorted.fy, cx: distorted.cx, cy: distorted.cy, lens };
+        let source = (distorted.width, distorted.height);
+        Ok(Undistortion { source, lens: k, pinhole: pinhole_camera(distorted, lens, what)? })
     }
 
     /// Where the ray of pinhole pixel `i` (row-major) lands in the photo (pixel centers at +0.5).
@@ -90,16 +76,13 @@ impl Undistortion {
     }
 }
 
-impl Pinhole {
-    /// `distorted` (pose and name) with this pinhole's size and intrinsics.
-    pub fn camera(&self, distorted: &Camera) -> Camera {
-        let Pinhole { width, height, fx, fy, cx, cy } = *self;
-        Camera { width, height, fx, fy, cx, cy, ..distorted.clone() }
+/// `distorted`, a camera with lens `lens`, as the pinhole camera its photos are undistorted into.
+pub fn pinhole_camera(distorted: &Camera, lens: Lens, what: &str) -> Result<Camera> {
+    if lens.is_pinhole() {
+        return Ok(distorted.clone());
     }
-}
-
-/// The pinhole a `width` x `height` photo with intrinsics `k` is undistorted into.
-pub fn pinhole_for(k: &ColmapIntrinsics, width: u32, height: u32, what: &str) -> Result<Pinhole> {
+    let k = ColmapIntrinsics { fx: distorted.fx, fy: distorted.fy, cx: distorted.cx, cy: distorted.cy, lens };
+    let (width, height) = (distorted.width, distorted.height);
     let (w, h) = (width as f64, height as f64);
     let edge = |n: u32| (0..=n).map(move |i| i as f64);
     let ray = |x: f64, y: f64| k.unproject(x, y);
@@ -148,14 +131,5 @@ pub fn pinhole_for(k: &ColmapIntrinsics, width: u32, height: u32, what: &str) ->
     if pw < 8 || ph < 8 {
         bail!("{what}: the undistorted image would be {pw}x{ph} pixels");
     }
-    Ok(Pinhole { width: pw, height: ph, fx, fy, cx: -left * fx, cy: -top * fy })
-}
-
-/// `distorted`, a camera with lens `lens`, as the pinhole camera its photos are undistorted into.
-pub fn pinhole_camera(distorted: &Camera, lens: Lens, what: &str) -> Result<Camera> {
-    if lens.is_pinhole() {
-        return Ok(distorted.clone());
-    }
-    let k = ColmapIntrinsics { fx: distorted.fx, fy: distorted.fy, cx: distorted.cx, cy: distorted.cy, lens };
-    Ok(pinhole_for(&k, distorted.width, distorted.height, what)?.camera(distorted))
+    Ok(Camera { width: pw, height: ph, fx, fy, cx: -left * fx, cy: -top * fy, ..distorted.clone() })
 }
