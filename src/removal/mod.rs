@@ -38,6 +38,7 @@ pub use select::{hole_mask, select};
 use crate::gpu::Gpu;
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
+use complete::source_views::SourceView;
 use complete::{Completed, Completer, ViewInputs};
 use consensus::ConsensusView;
 use fuse::{FuseConfig, FuseView, Patched};
@@ -189,11 +190,11 @@ pub fn remove(
         // saw the completed surface
         if !photos.is_empty() {
             if completer.photo_depth {
-                correct_depths(&mut views, completer);
+                correct_depths(&mut views, cameras, completer);
                 clock.lap("photo_depth");
             }
             if opts.stages.transfer {
-                transfer_colors(&mut views, completer)?;
+                transfer_colors(&mut views, cameras, completer)?;
                 clock.lap("transfer");
             }
         }
@@ -203,11 +204,10 @@ pub fn remove(
         clock.lap("fuse");
         if opts.stages.refine {
             // 4b. which invented pixels each view's refinement keeps
-            if !patch.owned.is_empty() {
-                consensus_weights(&mut views, &patch.owned, opts.fuse.tolerance);
-            }
+            let consensus =
+                (!patch.owned.is_empty()).then(|| consensus_weights(&mut views, &patch.owned, opts.fuse.tolerance));
             // 5. refinement, the holes weighing more than the rest of each view
-            let (refined, report) = refine_views(gpu, &result, &views, extent, opts, progress)?;
+            let (refined, report) = refine_views(gpu, &result, &views, cameras, consensus, extent, opts, progress)?;
             (result, refine_report) = (refined, Some(report));
             clock.lap("refine");
         }
@@ -277,13 +277,16 @@ fn put_back(views: &mut [EditedView], completed: Vec<Completed>) {
     }
 }
 
-/// Stage 3b over every view (needs the photos).
-fn correct_depths(views: &mut [EditedView], completer: &Completer) {
+/// Every view as a source of captured colors for the others (needs the photos), and its hole.
+fn sources_and_holes<'v>(views: &'v [EditedView]) -> (Vec<SourceView<'v>>, Vec<&'v [bool]>) {
+    views.iter().map(|v| (v.source().expect("photos were given"), v.masked.hole.as_slice())).unzip()
+}
+
+/// Stage 3b over every view (`cameras`, the views' own; needs the photos).
+fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Completer) {
     let mut completed = take_completions(views);
-    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
-    let sources: Vec<_> = views.iter().map(|v| v.source().expect("photos were given")).collect();
-    let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
-    let scales = completer.correct_depths(&cameras, &sources, &holes, &mut completed);
+    let (sources, holes) = sources_and_holes(views);
+    let scales = completer.correct_depths(cameras, &sources, &holes, &mut completed);
     drop((sources, holes));
     put_back(views, completed);
     for (v, scale) in views.iter_mut().zip(scales) {
@@ -291,14 +294,12 @@ fn correct_depths(views: &mut [EditedView], completer: &Completer) {
     }
 }
 
-/// Stage 3c over every view (needs the photos).
-fn transfer_colors(views: &mut [EditedView], completer: &mut Completer) -> Result<()> {
+/// Stage 3c over every view (`cameras`, the views' own; needs the photos).
+fn transfer_colors(views: &mut [EditedView], cameras: &[Camera], completer: &mut Completer) -> Result<()> {
     let mut completed = take_completions(views);
-    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
-    let sources: Vec<_> = views.iter().map(|v| v.source().expect("photos were given")).collect();
-    let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
+    let (sources, holes) = sources_and_holes(views);
     let fills: Vec<&[bool]> = views.iter().map(|v| v.masked.fill.as_slice()).collect();
-    let transferred = completer.transfer_colors(&cameras, &sources, &holes, &fills, &mut completed)?;
+    let transferred = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
     drop((sources, holes, fills));
     put_back(views, completed);
     for (v, t) in views.iter_mut().zip(transferred) {
@@ -336,8 +337,8 @@ fn fuse_patch(
 }
 
 /// Stage 4b: each view's refinement weights from how its inventions agree with the others'
-/// (consensus.rs); `owned` per view, from the fusion.
-fn consensus_weights(views: &mut [EditedView], owned: &[Vec<bool>], tolerance: f32) {
+/// (consensus.rs); `owned` per view, from the fusion. Each view's report gets its verdict.
+fn consensus_weights(views: &mut [EditedView], owned: &[Vec<bool>], tolerance: f32) -> Vec<Vec<f32>> {
     let cviews: Vec<ConsensusView> = views
         .iter()
         .zip(owned)
@@ -348,29 +349,30 @@ fn consensus_weights(views: &mut [EditedView], owned: &[Vec<bool>], tolerance: f
         .collect();
     let (masks, verdicts) = consensus::loss_masks(&cviews, tolerance);
     drop(cviews);
-    for ((v, m), verdict) in views.iter_mut().zip(masks).zip(verdicts) {
-        v.consensus = Some(m);
+    for (v, verdict) in views.iter_mut().zip(verdicts) {
         v.report.consensus = Some(verdict);
     }
+    masks
 }
 
-/// Stage 5: refines `scene` against the completed views, each view's hole weighing
-/// `hole_weight` times the rest, times its consensus weights.
+/// Stage 5: refines `scene` against the completed views (`cameras`, theirs), each view's hole
+/// weighing `hole_weight` times the rest, times its `consensus` weights where there are some.
+#[allow(clippy::too_many_arguments)]
 fn refine_views(
     gpu: &Gpu,
     scene: &GaussianScene,
     views: &[EditedView],
+    cameras: &[Camera],
+    consensus: Option<Vec<Vec<f32>>>,
     extent: f64,
     opts: &RemoveOptions,
     progress: Progress,
 ) -> Result<(GaussianScene, RefineReport)> {
     let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
-    let consensus: Option<Vec<Vec<f32>>> = views.iter().map(|v| v.consensus.clone()).collect();
     let masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
     let targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
-    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
     let total = opts.refine.iters as usize;
-    refine::refine(gpu, scene, &cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
+    refine::refine(gpu, scene, cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
         progress("refine", it as usize, total)
     })
 }

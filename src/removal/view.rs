@@ -1,7 +1,7 @@
 //! One edited view as the removal's stages fill it in: stage 2 gives its renders and hole, stage 3
-//! its completion, 3c the pixels that took a photo's color, 4 the pixels that became patch
-//! Gaussians, 4b the refinement's loss weights. Each stage reads and writes these fields (and the
-//! view's line of the report) instead of a vector of its own per stage.
+//! its completion, 3c the pixels that took a photo's color, 4b its consensus verdict. Each stage
+//! reads and writes these fields (and the view's line of the report) instead of a vector of its
+//! own per stage.
 
 use super::complete::photo_depth::DepthScale;
 use super::complete::rectify::Intrinsics;
@@ -22,9 +22,6 @@ pub struct EditedView<'a> {
     pub completed: Option<Completed>,
     /// Stage 3c: the hole pixels that took a photo's color (None: no transfer ran).
     pub transferred: Option<Vec<bool>>,
-    /// Stage 4b: the refinement's loss weight per pixel from the views' consensus (None: not
-    /// computed; every pixel weighs 1).
-    pub consensus: Option<Vec<f32>>,
     pub report: ViewReport,
 }
 
@@ -56,7 +53,7 @@ pub struct ViewReport {
 impl<'a> EditedView<'a> {
     pub fn new(camera: &'a Camera, photo: Option<&'a [f32]>, masked: MaskedView) -> EditedView<'a> {
         let report = ViewReport { view: camera.name.clone(), ..Default::default() };
-        EditedView { camera, photo, masked, completed: None, transferred: None, consensus: None, report }
+        EditedView { camera, photo, masked, completed: None, transferred: None, report }
     }
 
     /// What completion reads of this view after stage 2.
