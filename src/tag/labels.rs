@@ -32,12 +32,18 @@ impl LabelMaps {
 /// A mask or label image's bytes as one 8-bit channel at `width` x `height` (nearest-neighbour
 /// resized when its own size differs). `what` names the file in errors.
 pub fn decode_mask(data: &[u8], what: &str, width: u32, height: u32) -> Result<Vec<u8>> {
+    let (w, h, mask) = decode_mask_as_stored(data, what)?;
+    Ok(crate::image_ops::resize_nearest_u8(&mask, w, h, width, height))
+}
+
+/// A mask or label image's bytes as one 8-bit channel at its own size: (width, height, pixels).
+fn decode_mask_as_stored(data: &[u8], what: &str) -> Result<(u32, u32, Vec<u8>)> {
     let img = crate::io::decode_image(data, what)?.to_luma8();
     let (w, h) = img.dimensions();
     if w == 0 || h == 0 {
         bail!("{what}: the mask is empty ({w}x{h})");
     }
-    Ok(crate::image_ops::resize_nearest_u8(&img.into_raw(), w, h, width, height))
+    Ok((w, h, img.into_raw()))
 }
 
 fn mask_path(dir: &Path, view: &str) -> Result<PathBuf> {
@@ -66,13 +72,8 @@ pub fn load(dir: &Path, views: &[&View]) -> Result<LabelMaps> {
     let stem = |v: &View| v.camera.name.clone();
     let read_gray = |path: &Path, v: &View| -> Result<Vec<u8>> {
         let data = std::fs::read(path).with_context(|| format!("{}: cannot read mask", path.display()))?;
-        let what = path.display().to_string();
-        let img = crate::io::decode_image(&data, &what)?.to_luma8();
-        let (w, h) = img.dimensions();
-        if w == 0 || h == 0 {
-            bail!("{what}: the mask is empty ({w}x{h})");
-        }
-        Ok(v.label_map(&img.into_raw(), w, h))
+        let (w, h, mask) = decode_mask_as_stored(&data, &path.display().to_string())?;
+        Ok(v.label_map(&mask, w, h))
     };
     let folders = object_folders(dir)?;
     if folders.is_empty() {
