@@ -200,6 +200,16 @@ pub fn read_cameras_json(path: &Path) -> Result<Vec<Camera>> {
 }
 
 /// `read_cameras_json` on the file's bytes (`what` names it in errors).
+/// The world-to-camera rotation and translation (`Camera`'s pose) of a camera whose
+/// camera-to-world rotation (OpenCV axes) is `c2w` and whose center is `center`: R^T and -R^T c.
+pub fn pose_from_camera_to_world(c2w: [[f64; 3]; 3], center: [f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+    let r = c2w;
+    let rotation = [[r[0][0], r[1][0], r[2][0]], [r[0][1], r[1][1], r[2][1]], [r[0][2], r[1][2], r[2][2]]];
+    let c = center;
+    let translation = [0, 1, 2].map(|a| -(rotation[a][0] * c[0] + rotation[a][1] * c[1] + rotation[a][2] * c[2]));
+    (rotation, translation)
+}
+
 pub fn parse_cameras_json(data: &[u8], what: &str) -> Result<Vec<Camera>> {
     let list: Vec<JsonCamera> =
         serde_json::from_slice(data).with_context(|| format!("{what}: not an INRIA cameras.json"))?;
@@ -208,14 +218,7 @@ pub fn parse_cameras_json(data: &[u8], what: &str) -> Result<Vec<Camera>> {
     }
     list.into_iter()
         .map(|c| {
-            let r = c.rotation; // camera to world
-            let rotation = [[r[0][0], r[1][0], r[2][0]], [r[0][1], r[1][1], r[2][1]], [r[0][2], r[1][2], r[2][2]]];
-            let p = c.position;
-            let translation = [
-                -(rotation[0][0] * p[0] + rotation[0][1] * p[1] + rotation[0][2] * p[2]),
-                -(rotation[1][0] * p[0] + rotation[1][1] * p[1] + rotation[1][2] * p[2]),
-                -(rotation[2][0] * p[0] + rotation[2][1] * p[1] + rotation[2][2] * p[2]),
-            ];
+            let (rotation, translation) = pose_from_camera_to_world(c.rotation, c.position);
             let camera = Camera {
                 name: c.img_name,
                 width: c.width,

@@ -10,11 +10,12 @@
 //!
 //! The result is the same model a COLMAP capture gives (colmap.rs), so every command reads either.
 
-use super::camera::Camera;
+use super::camera::{pose_from_camera_to_world, Camera};
 use super::colmap::{ColmapModel, Point3D};
 use super::lens::{ColmapIntrinsics, Lens};
 use crate::rng::Rng;
 use anyhow::{anyhow, bail, Context, Result};
+use glam::{DMat4, DVec3};
 use serde_json::Value;
 use std::path::Path;
 
@@ -48,7 +49,7 @@ fn number(frame: &Value, top: &Value, key: &str, what: &str) -> Result<Option<f6
 }
 
 /// A 4x4 (or 3x4) row-major matrix field.
-fn matrix(v: &Value, key: &str, what: &str) -> Result<[[f64; 4]; 4]> {
+fn matrix(v: &Value, key: &str, what: &str) -> Result<DMat4> {
     let rows = v.as_array().ok_or_else(|| anyhow!("{what}: field {key:?} is not a 4x4 matrix"))?;
     if rows.len() != 4 && rows.len() != 3 {
         bail!("{what}: field {key:?} has {} rows, not 4 (or 3)", rows.len());
@@ -66,7 +67,8 @@ fn matrix(v: &Value, key: &str, what: &str) -> Result<[[f64; 4]; 4]> {
                 .ok_or_else(|| anyhow!("{what}: field {key:?}: not a finite number"))?;
         }
     }
-    Ok(m)
+    // rows as written; glam stores columns
+    Ok(DMat4::from_cols_array_2d(&m).transpose())
 }
 
 /// The intrinsics and lens of `frame` (frame fields override the file's).
@@ -117,7 +119,13 @@ pub fn parse_transforms(json: &Value, dir: &Path, what: &str) -> Result<ColmapMo
     // world = applied * original world: undone with its inverse (a rigid 3x4, possibly with a scale)
     let undo = match &json["applied_transform"] {
         Value::Null => None,
-        v => Some(invert_affine(&matrix(v, "applied_transform", what)?, what)?),
+        v => {
+            let applied = matrix(v, "applied_transform", what)?;
+            if applied.determinant().abs() < 1e-12 {
+                bail!("{what}: field \"applied_transform\" is singular");
+            }
+            Some(applied.inverse())
+        }
     };
     let mut views: Vec<(Camera, Lens)> = Vec::new();
     for (i, frame) in frames.iter().enumerate() {
@@ -129,27 +137,14 @@ pub fn parse_transforms(json: &Value, dir: &Path, what: &str) -> Result<ColmapMo
             .filter(|s| !s.is_empty())
             .ok_or_else(|| anyhow!("{at}: field \"file_path\" names no file"))?;
         let (w, h, k) = intrinsics(frame, json, &at)?;
-        let mut c2w = matrix(&frame["transform_matrix"], "transform_matrix", &at)?;
-        if let Some(u) = &undo {
-            c2w = mul(u, &c2w);
-        }
-        // OpenGL camera axes (y up, looking down -z) to COLMAP's (y down, looking down +z)
-        let mut r = [[0.0; 3]; 3];
-        let mut scale = 0.0;
-        for row in 0..3 {
-            r[row] = [c2w[row][0], -c2w[row][1], -c2w[row][2]];
-            scale += r[row][0] * r[row][0];
-        }
-        // a scaled applied_transform leaves scaled axes: normalize them
-        let s = scale.sqrt();
-        if s > 0.0 {
-            r.iter_mut().for_each(|row| row.iter_mut().for_each(|v| *v /= s));
-        }
-        let center = [c2w[0][3], c2w[1][3], c2w[2][3]];
-        // world-to-camera: R^T and -R^T c
-        let rotation = [[r[0][0], r[1][0], r[2][0]], [r[0][1], r[1][1], r[2][1]], [r[0][2], r[1][2], r[2][2]]];
-        let translation =
-            [0, 1, 2].map(|a| -(rotation[a][0] * center[0] + rotation[a][1] * center[1] + rotation[a][2] * center[2]));
+        let c2w = undo.unwrap_or(DMat4::IDENTITY) * matrix(&frame["transform_matrix"], "transform_matrix", &at)?;
+        // OpenGL camera axes (y up, looking down -z) to COLMAP's (y down, looking down +z); a
+        // scaled applied_transform leaves scaled axes, normalized here
+        let axes = [c2w.x_axis.truncate(), -c2w.y_axis.truncate(), -c2w.z_axis.truncate()];
+        let scale = axes[0].length();
+        let axes = axes.map(|a| if scale > 0.0 { a / scale } else { a });
+        let c2w_rotation = [0, 1, 2].map(|row| [axes[0][row], axes[1][row], axes[2][row]]);
+        let (rotation, translation) = pose_from_camera_to_world(c2w_rotation, c2w.w_axis.truncate().to_array());
         let camera =
             Camera { name, width: w, height: h, fx: k.fx, fy: k.fy, cx: k.cx, cy: k.cy, rotation, translation };
         camera.check(&at)?;
@@ -177,51 +172,16 @@ pub fn parse_transforms(json: &Value, dir: &Path, what: &str) -> Result<ColmapMo
     Ok(ColmapModel { cameras, lenses, points, warnings })
 }
 
-/// The inverse of an affine 4x4 (its 3x3 part inverted by cofactors).
-fn invert_affine(m: &[[f64; 4]; 4], what: &str) -> Result<[[f64; 4]; 4]> {
-    let a = |r: usize, c: usize| m[r][c];
-    let det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1)) - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0))
-        + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
-    if det.abs() < 1e-12 {
-        bail!("{what}: field \"applied_transform\" is singular");
-    }
-    let mut inv = [[0.0; 4]; 4];
-    for r in 0..3 {
-        for c in 0..3 {
-            let (r1, r2, c1, c2) = ((c + 1) % 3, (c + 2) % 3, (r + 1) % 3, (r + 2) % 3);
-            inv[r][c] = (a(r1, c1) * a(r2, c2) - a(r1, c2) * a(r2, c1)) / det;
-        }
-    }
-    for r in 0..3 {
-        inv[r][3] = -(inv[r][0] * m[0][3] + inv[r][1] * m[1][3] + inv[r][2] * m[2][3]);
-    }
-    inv[3][3] = 1.0;
-    Ok(inv)
-}
-
-fn mul(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4]) -> [[f64; 4]; 4] {
-    let mut m = [[0.0; 4]; 4];
-    for r in 0..4 {
-        for c in 0..4 {
-            m[r][c] = (0..4).map(|k| a[r][k] * b[k][c]).sum();
-        }
-    }
-    m
-}
-
 /// The points of a point-cloud PLY (x, y, z and red, green, blue), back in the original world.
-fn ply_points(ply: &crate::scene::GaussianScene, undo: Option<&[[f64; 4]; 4]>) -> Vec<Point3D> {
+fn ply_points(ply: &crate::scene::GaussianScene, undo: Option<&DMat4>) -> Vec<Point3D> {
     let color = |name: &str| ply.extras.iter().find(|e| e.name == name).map(|e| &e.values);
     let (r, g, b) = (color("red"), color("green"), color("blue"));
     ply.means
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            let p = [m[0] as f64, m[1] as f64, m[2] as f64];
-            let xyz = match undo {
-                Some(u) => [0, 1, 2].map(|a| u[a][0] * p[0] + u[a][1] * p[1] + u[a][2] * p[2] + u[a][3]),
-                None => p,
-            };
+            let p = DVec3::new(m[0] as f64, m[1] as f64, m[2] as f64);
+            let xyz = undo.map_or(p, |u| u.transform_point3(p)).to_array();
             let c = |v: Option<&Vec<f64>>| v.map_or(128, |v| v[i].clamp(0.0, 255.0) as u8);
             Point3D { xyz, rgb: [c(r), c(g), c(b)] }
         })
