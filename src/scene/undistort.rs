@@ -32,9 +32,8 @@ impl Undistortion {
     /// The undistortion of the photo of `distorted` (its pose, name, size and intrinsics) taken
     /// through `lens`; `what` names it in errors.
     pub fn new(distorted: &Camera, lens: Lens, what: &str) -> Result<Undistortion> {
-        let k = ColmapIntrinsics { fx: distorted.fx, fy: distorted.fy, cx: distorted.cx, cy: distorted.cy, lens };
         let source = (distorted.width, distorted.height);
-        Ok(Undistortion { source, lens: k, pinhole: pinhole_camera(distorted, lens, what)? })
+        Ok(Undistortion { source, lens: intrinsics(distorted, lens), pinhole: pinhole_camera(distorted, lens, what)? })
     }
 
     /// Where the ray of pinhole pixel `i` (row-major) lands in the photo (pixel centers at +0.5).
@@ -76,12 +75,17 @@ impl Undistortion {
     }
 }
 
+/// The photo's intrinsics: `camera`'s focal lengths and principal point with `lens`.
+fn intrinsics(camera: &Camera, lens: Lens) -> ColmapIntrinsics {
+    ColmapIntrinsics { fx: camera.fx, fy: camera.fy, cx: camera.cx, cy: camera.cy, lens }
+}
+
 /// `distorted`, a camera with lens `lens`, as the pinhole camera its photos are undistorted into.
 pub fn pinhole_camera(distorted: &Camera, lens: Lens, what: &str) -> Result<Camera> {
     if lens.is_pinhole() {
         return Ok(distorted.clone());
     }
-    let k = ColmapIntrinsics { fx: distorted.fx, fy: distorted.fy, cx: distorted.cx, cy: distorted.cy, lens };
+    let k = intrinsics(distorted, lens);
     let (width, height) = (distorted.width, distorted.height);
     let (w, h) = (width as f64, height as f64);
     let edge = |n: u32| (0..=n).map(move |i| i as f64);

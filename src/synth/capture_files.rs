@@ -69,14 +69,17 @@ const APPLIED: [[f64; 4]; 3] = [[0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0
 /// Writes the same capture as a nerfstudio `transforms.json` (OpenGL camera axes, the world moved
 /// by `APPLIED`) with its points in `sparse_pc.ply`.
 pub(super) fn write_transforms(cfg: &SynthConfig, cameras: &[Camera], points: &[Point3D], out: &Path) -> Result<()> {
-    let apply = |p: [f64; 3]| [0, 1, 2].map(|r| (0..3).map(|c| APPLIED[r][c] * p[c]).sum::<f64>() + APPLIED[r][3]);
+    let rotate = |v: [f64; 3]| [0, 1, 2].map(|row| (0..3).map(|c| APPLIED[row][c] * v[c]).sum::<f64>());
+    let apply = |p: [f64; 3]| {
+        let r = rotate(p);
+        [0, 1, 2].map(|row| r[row] + APPLIED[row][3])
+    };
     let frames: Vec<serde_json::Value> = cameras
         .iter()
         .map(|cam| {
             // camera-to-world in OpenGL axes: the columns of R^T (the rows of R), y and z negated,
             // then moved by APPLIED
             let r = &cam.rotation;
-            let rotate = |v: [f64; 3]| [0, 1, 2].map(|row| (0..3).map(|c| APPLIED[row][c] * v[c]).sum::<f64>());
             let cols = [rotate(r[0]), rotate(r[1].map(|v| -v)), rotate(r[2].map(|v| -v))];
             let c = apply(cam.center());
             let m: Vec<[f64; 4]> = (0..3).map(|row| [cols[0][row], cols[1][row], cols[2][row], c[row]]).collect();
