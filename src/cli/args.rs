@@ -35,6 +35,20 @@ pub struct CaptureArgs {
     pub downscale: u32,
 }
 
+impl DeviceArgs {
+    /// These flags as they were given, for a step that runs another cogeo command line.
+    pub fn command_line(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        if let Some(d) = &self.device {
+            v.extend(["--device".to_string(), d.clone()]);
+        }
+        if let Some(m) = self.max_device_memory {
+            v.extend(["--max-device-memory".to_string(), m.to_string()]);
+        }
+        v
+    }
+}
+
 pub use cogeo::flag_values::parse_rgb;
 
 pub fn progress(len: usize, what: &str) -> ProgressBar {

@@ -72,10 +72,7 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
     }
     let p = |name: &str| out.join(name).to_string_lossy().into_owned();
     let labels = a.labels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(",");
-    let mut device = Vec::new();
-    if let Some(d) = &a.device.device {
-        device = vec!["--device".to_string(), d.clone()];
-    }
+    let device = a.device.command_line();
     let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<String>>();
     let (data, layout) = (out.join("data"), Layout { out });
     let capture = Capture::at(&data);
@@ -133,7 +130,10 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
     let mut commands = Vec::new();
     for (i, (name, mut args)) in steps.into_iter().enumerate() {
         eprintln!("== {}/{} {name}", i + 1, 6);
-        args.extend(device.iter().cloned());
+        // synth ray-casts on the CPU and takes no device flags
+        if name != "synth" {
+            args.extend(device.iter().cloned());
+        }
         let t = std::time::Instant::now();
         run_command(&args).with_context(|| format!("demo step {name}"))?;
         timings.insert(name.to_string(), t.elapsed().as_secs_f64().into());

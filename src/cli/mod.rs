@@ -103,4 +103,20 @@ mod tests {
         }
         cli.debug_assert();
     }
+
+    /// `run` and `demo` hand the device flags on to their steps as they were given.
+    #[test]
+    fn device_flags_pass_on_as_given() {
+        use clap::Parser;
+        let device = |extra: &[&str]| {
+            let args = [&["cogeo", "train", "--data", "d", "--out", "o"], extra].concat();
+            match super::Cli::try_parse_from(args).unwrap().command {
+                super::Command::Train(t) => t.device.command_line(),
+                _ => unreachable!(),
+            }
+        };
+        let given = ["--device", "llvmpipe", "--max-device-memory", "512.5"];
+        assert_eq!(device(&given), given);
+        assert!(device(&[]).is_empty());
+    }
 }

@@ -47,13 +47,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     let capture = Capture { data: &a.data, images: Some(&a.capture.images), downscale: Some(a.capture.downscale) };
     let (seed, background) = (a.removal.options.seed.to_string(), a.removal.options.background);
     let background = background.map(|c| c.to_string()).join(",");
-    let mut device = Vec::new();
-    if let Some(d) = &a.device.device {
-        device.extend(["--device".to_string(), d.clone()]);
-    }
-    if let Some(m) = a.device.max_device_memory {
-        device.extend(["--max-device-memory".to_string(), m.to_string()]);
-    }
+    let device = a.device.command_line();
     let mut train = pipeline::train(&capture, &layout.train());
     train.extend(["--iters".into(), a.iters.to_string(), "--sh-degree".into(), a.sh_degree.to_string()]);
     train.extend(["--checkpoint-every".into(), "0".into(), "--seed".into(), seed.clone()]);
