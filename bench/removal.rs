@@ -6,7 +6,7 @@
 //!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
 //!                                  --width 160 --height 120 --views 16 --supersample 1 --repeat-full
 //!                                  --retrain 2 --lpips-model lpips.onnx --fid-model inception.onnx
-//!                                  --no-results]
+//!                                  --exposure-jitter 0.2 --no-results]
 //!
 //! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
 //! removal only, cogeo, ground truth on one held-out view), and replaces the table between the
@@ -16,6 +16,9 @@
 //! atomics in the GPU passes) that any difference between variants must exceed. `--retrain N`
 //! trains each scene N more times with other seeds and runs the full pipeline and its closest
 //! rivals (`RETRAIN_VARIANTS`) on each: the spread across trainings, in its own table.
+//! `--exposure-jitter X` makes scenes whose views' exposure gains vary by +-X and runs only the
+//! full pipeline, on a training without and one with `--exposure`, into the `removal-exposure-table`
+//! markers instead.
 
 #[path = "common.rs"]
 mod common;
@@ -71,6 +74,10 @@ struct Training<'a> {
     iters: &'a str,
     lpips: &'a Option<String>,
     fid: &'a Option<String>,
+    /// Train with `--exposure` and hand the learned maps to `cogeo remove`.
+    exposure: bool,
+    /// Score with `cogeo eval --fit-exposure` (captures whose views' exposure varies).
+    fit_exposure: bool,
 }
 
 impl Training<'_> {
@@ -83,6 +90,9 @@ impl Training<'_> {
         let capture = Capture::at(data);
         let mut train_args = pipeline::train(&capture, &layout.train());
         train_args.extend(pipeline::synth_training(self.iters.parse().expect("--iters is a number"), seed));
+        if self.exposure {
+            train_args.push("--exposure".into());
+        }
         cogeo(&train_args);
         let train_metrics = read_json(&layout.train().join("metrics.json"));
         let mut methods: Vec<&str> = variants.iter().map(|v| v.1).collect();
@@ -104,6 +114,9 @@ impl Training<'_> {
             let tagged = dir.join(format!("tagged_{method}.ply"));
             let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(spec.labels), &out);
             a.extend(s(extra));
+            if self.exposure {
+                a.extend(s(&["--exposure", &p(&layout.exposure())]));
+            }
             cogeo(&a);
             let metrics_path = out.join("metrics.json");
             let mut e = pipeline::eval(&out, self.truth, &data.join("object_mask"), &metrics_path);
@@ -114,11 +127,15 @@ impl Training<'_> {
             if let Some(m) = self.fid {
                 e.extend(s(&["--fid-model", m]));
             }
+            if self.fit_exposure {
+                e.push("--fit-exposure".into());
+            }
             cogeo(&e);
             let report = read_json(&out.join("report.json"));
             let m = read_json(&metrics_path);
             rows.push(json!({
                 "scene": spec.name, "removed_labels": spec.labels, "variant": variant, "training_seed": seed,
+                "exposure": self.exposure, "train_test_psnr_exposure_fitted": train_metrics["test"]["psnr_exposure_fitted"],
                 "device": report["device"], "train_test_psnr": train_metrics["test"]["psnr"],
                 "metrics": m, "stage_seconds": report["seconds"], "total_seconds": report["total_seconds"],
                 "peak_rss_mib": report["peak_rss_mib"], "gaussians": report["gaussians"],
@@ -139,7 +156,14 @@ fn main() {
     let supersample = arg("--supersample", "1");
     let repeat_full = args.iter().any(|a| a == "--repeat-full");
     let retrain: u64 = arg("--retrain", "0").parse().expect("--retrain takes a count");
+    // captures whose views' exposure varies: every scene trained without and with --exposure,
+    // the full pipeline on each, scored with the held-out views' exposure fitted (its own table)
+    let jitter = arg("--exposure-jitter", "0");
+    let jittered = jitter.parse::<f64>().expect("--exposure-jitter takes a number") > 0.0;
     let mut variants: Vec<(&str, &str, &[&str])> = VARIANTS.to_vec();
+    if jittered {
+        variants = vec![VARIANTS[0]];
+    }
     if repeat_full {
         variants.insert(1, ("cogeo (full, second run)", "vote", &[]));
     }
@@ -180,14 +204,30 @@ fn main() {
             spec.labels,
             "--supersample",
             &supersample,
+            "--exposure-jitter",
+            &jitter,
         ]));
         let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
         let truth = cogeo::synth::ground_truth(&data, &labels);
         assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);
-        let run = Training { spec, data: &data, truth: &truth.images, iters: &iters, lpips: &lpips, fid: &fid };
+        let mut run = Training {
+            spec,
+            data: &data,
+            truth: &truth.images,
+            iters: &iters,
+            lpips: &lpips,
+            fid: &fid,
+            exposure: false,
+            fit_exposure: jittered,
+        };
         for r in run.variants(&dir, spec.seed, &variants) {
             device = r["device"].as_str().unwrap_or("?").to_string();
             rows.push(r);
+        }
+        if jittered {
+            run.exposure = true;
+            rows.extend(run.variants(&dir.join("exposure"), spec.seed, &variants));
+            continue;
         }
         for i in 1..=retrain {
             let seed = spec.seed + 1000 * i;
@@ -206,6 +246,11 @@ fn main() {
                 spec.name,
             ));
         }
+    }
+    if jittered {
+        exposure_table(&args, &rows, &jitter, &iters, &device);
+        std::fs::remove_dir_all(&root).ok();
+        return;
     }
     // the table
     let rays = if supersample == "1" {
@@ -366,4 +411,39 @@ fn main() {
     }
     common::update_results(&args, "removal-table", &format!("{md}{image_line}"));
     std::fs::remove_dir_all(&root).ok();
+}
+
+/// The `--exposure-jitter` table: each scene's full pipeline trained without and with
+/// `--exposure`, held-out views scored with their exposure fitted outside the mask.
+fn exposure_table(args: &[String], rows: &[Value], jitter: &str, iters: &str, device: &str) {
+    let mut md = format!(
+        "Removal on `cogeo synth` scenes whose views' exposure gains are jittered by +-{jitter} per channel \
+         (`cargo bench --bench removal -- --exposure-jitter {jitter}`; {iters} training iterations), on {device}: the \
+         full pipeline on a scene trained without and with `--exposure` (whose maps `cogeo remove --exposure` \
+         takes). Held-out views against the exact ground truth, each render mapped through the affine color map \
+         fitted on its pixels outside the mask (`cogeo eval --fit-exposure`; the held-out photo's exposure is \
+         unknown to any scene); train test PSNR is the training's held-out PSNR, raw / exposure fitted.\n\n\
+         | scene | training | train test PSNR | masked PSNR | seen-elsewhere PSNR | never-seen PSNR | outside PSNR |\n\
+         |---|---|---:|---:|---:|---:|---:|\n"
+    );
+    for r in rows {
+        let m = &r["metrics"];
+        md += &format!(
+            "| {} | {} | {} / {} | {} | {} | {} | {} |\n",
+            r["scene"].as_str().unwrap(),
+            if r["exposure"].as_bool() == Some(true) { "--exposure" } else { "plain" },
+            num(&r["train_test_psnr"], 2),
+            num(&r["train_test_psnr_exposure_fitted"], 2),
+            num(&m["mask"]["psnr"], 2),
+            num(&m["seen_elsewhere"]["psnr"], 2),
+            num(&m["never_seen"]["psnr"], 2),
+            num(&m["outside"]["psnr"], 2),
+        );
+    }
+    println!("{md}");
+    common::write_json(
+        &common::results_path("removal-exposure.json"),
+        &json!({ "device": device, "jitter": jitter, "rows": rows }),
+    );
+    common::update_results(args, "removal-exposure-table", &md);
 }

@@ -64,6 +64,10 @@ impl Layout<'_> {
     pub fn train(&self) -> std::path::PathBuf {
         self.out.join("train")
     }
+    /// The training views' exposure maps of `cogeo train --exposure`.
+    pub fn exposure(&self) -> std::path::PathBuf {
+        self.train().join("exposure.json")
+    }
     pub fn trained_scene(&self) -> std::path::PathBuf {
         self.out.join("train/scene.ply")
     }

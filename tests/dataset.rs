@@ -54,6 +54,7 @@ fn synth(dir: &std::path::Path, width: u32, height: u32, supersample: u32) {
         gt_without: Vec::new(),
         supersample,
         distortion: [0.0; 4],
+        exposure_jitter: 0.0,
     };
     generate(&cfg, dir, &|_, _| {}).unwrap();
 }

@@ -17,6 +17,7 @@ fn config() -> SynthConfig {
         gt_without: Vec::new(),
         supersample: 3,
         distortion: [0.0; 4],
+        exposure_jitter: 0.0,
     }
 }
 

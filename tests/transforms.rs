@@ -21,6 +21,7 @@ fn synth(dir: &Path, distortion: [f64; 4]) {
         gt_without: Vec::new(),
         supersample: 1,
         distortion,
+        exposure_jitter: 0.0,
     };
     generate(&cfg, dir, &|_, _| {}).unwrap();
 }

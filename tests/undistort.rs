@@ -35,6 +35,7 @@ fn room(width: u32, height: u32, views: usize, seed: u64, supersample: u32, dist
         gt_without: Vec::new(),
         supersample,
         distortion,
+        exposure_jitter: 0.0,
     }
 }
 

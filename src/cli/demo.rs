@@ -160,6 +160,7 @@ pub fn run(a: DemoArgs, run_command: &dyn Fn(&[String]) -> Result<()>) -> Result
             lpips_min_side: a.models.lpips_min_side,
             fid: a.models.fid_model.clone(),
             fid_input: a.models.fid_input(),
+            fit_exposure: false,
         })
     };
     let (ours, only) = (eval("removal")?, eval("removal_only")?);

@@ -40,6 +40,12 @@ pub struct EvalArgs {
     pub thresholds: cogeo::eval::folder::SynthThresholds,
     #[command(flatten)]
     pub models: cogeo::eval::models::MetricModels,
+    /// Map each render through the affine color map (3x3 and bias) fitted by least squares to its
+    /// ground truth on the pixels outside the mask before scoring: for captures whose exposure
+    /// changes from view to view, whose held-out views' exposure no scene knows. The JSON's
+    /// "exposure" says which.
+    #[arg(long)]
+    pub fit_exposure: bool,
     /// Output JSON (written atomically).
     #[arg(long, default_value = "metrics.json")]
     pub out: PathBuf,
@@ -66,6 +72,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
         lpips_min_side: a.models.lpips_min_side,
         fid: a.models.fid_model.clone(),
         fid_input: a.models.fid_input(),
+        fit_exposure: a.fit_exposure,
     };
     let metrics = evaluate(&cfg)?;
     cogeo::io::write_atomic(&a.out, |w| {

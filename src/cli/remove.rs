@@ -43,8 +43,42 @@ pub struct RemoveArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub removal: RemovalFlags,
+    /// The training views' exposure maps (`exposure.json` of `cogeo train --exposure`): each
+    /// photo is taken back into the scene's colors through the inverse of its own map before
+    /// the removal borrows its pixels, so a brighter source view leaves no brighter patch.
+    #[arg(long, value_name = "EXPOSURE_JSON")]
+    pub exposure: Option<PathBuf>,
     #[command(flatten)]
     pub device: DeviceArgs,
+}
+
+/// The training views' photos in the scene's colors: through the inverse of each view's map in
+/// `exposure` (as they are without one; a view the file does not name keeps its colors, with a
+/// warning).
+fn photos_in_scene_colors(train: &[cogeo::scene::dataset::View], exposure: Option<&Path>) -> Result<Vec<Vec<f32>>> {
+    let Some(path) = exposure else { return Ok(train.iter().map(|v| v.image.clone()).collect()) };
+    let maps = cogeo::scene::exposure::Exposures::read(path)?;
+    let mut missing = Vec::new();
+    let photos = train
+        .iter()
+        .map(|v| match maps.get(&v.camera.name) {
+            // read() checked that every map inverts
+            Some(map) => map.inverse().unwrap().apply(&v.image),
+            None => {
+                missing.push(v.camera.name.as_str());
+                v.image.clone()
+            }
+        })
+        .collect();
+    if !missing.is_empty() {
+        eprintln!(
+            "warning: {}: no exposure map for {} view(s) ({}); their photos are used as they are",
+            path.display(),
+            missing.len(),
+            missing.join(", ")
+        );
+    }
+    Ok(photos)
 }
 
 /// The labels named by --labels and --prompt.
@@ -132,7 +166,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         &scene,
         &scene_labels,
         &cameras,
-        &data.train.iter().map(|v| v.image.clone()).collect::<Vec<_>>(),
+        &photos_in_scene_colors(&data.train, a.exposure.as_deref())?,
         data.extent,
         &opts,
         &mut completer,

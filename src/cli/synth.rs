@@ -48,6 +48,20 @@ pub struct SynthArgs {
     /// OPENCV. Default: a pinhole.
     #[arg(long, value_delimiter = ',', num_args = 1, allow_negative_numbers = true, value_name = "K1,K2,P1,P2")]
     pub distortion: Vec<f64>,
+    /// Exposure jitter X: each view's photos (and its ground truth) are multiplied per channel by
+    /// a gain drawn uniformly from [1-X, 1+X], saturating at white, as a phone's exposure and
+    /// white balance change between shots; synth.json lists the gains. Default: 0 (none).
+    #[arg(long, default_value_t = 0.0, value_name = "X", value_parser = parse_jitter)]
+    pub exposure_jitter: f64,
+}
+
+fn parse_jitter(s: &str) -> Result<f64, String> {
+    let x: f64 = s.parse().map_err(|_| format!("{s:?} is not a number"))?;
+    if (0.0..1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{x} is not in [0, 1)"))
+    }
 }
 
 pub fn run(a: SynthArgs) -> Result<()> {
@@ -67,6 +81,7 @@ pub fn run(a: SynthArgs) -> Result<()> {
         gt_without: a.gt_without.clone(),
         supersample: a.supersample,
         distortion,
+        exposure_jitter: a.exposure_jitter,
     };
     let bar = progress(2 * a.views, "synth");
     let objects = cogeo::synth::generate(&cfg, &a.out, &|done, _| bar.set_position(done as u64))?;

@@ -14,7 +14,8 @@ pub struct TrainArgs {
     /// and an image folder.
     #[arg(long)]
     pub data: PathBuf,
-    /// Output folder: scene.ply, metrics.json and checkpoint/ (created if missing).
+    /// Output folder: scene.ply, metrics.json, checkpoint/ and, with --exposure, exposure.json
+    /// (created if missing).
     #[arg(long)]
     pub out: PathBuf,
     #[command(flatten)]
@@ -68,6 +69,9 @@ pub fn run(a: TrainArgs) -> Result<()> {
     if let Some(c) = &resumed {
         t.set_step(c.step);
         t.load_moments(&c.moments)?;
+        if let Some(e) = c.exposures.as_ref().filter(|_| a.config.exposure) {
+            t.resume_exposures(e)?;
+        }
         eprintln!("resumed at iteration {} with {} Gaussians", c.step, scene.len());
     }
     eprintln!(
@@ -126,17 +130,21 @@ pub fn run(a: TrainArgs) -> Result<()> {
     let text = serde_json::to_string_pretty(&report)?;
     let batch = cogeo::io::OutputBatch::begin();
     ply::write_ply(&scene, &a.out.join("scene.ply"))?;
+    if let Some(e) = t.exposure_file()? {
+        e.write(&a.out.join("exposure.json"))?;
+    }
     cogeo::io::write_atomic(&a.out.join("metrics.json"), |w| {
         use std::io::Write;
         w.write_all(text.as_bytes()).map_err(Into::into)
     })?;
     batch.commit()?;
     eprintln!(
-        "done: {} Gaussians; test PSNR {:.2} dB SSIM {:.4} ({} views); train PSNR {:.2}; {:.1} it/s; wrote {}",
+        "done: {} Gaussians; test PSNR {:.2} dB SSIM {:.4} ({} views; {:.2} dB with each view's exposure fitted); train PSNR {:.2}; {:.1} it/s; wrote {}",
         scene.len(),
         test.psnr,
         test.ssim,
         test.views,
+        test.psnr_exposure_fitted,
         train.psnr,
         (t.step - first_step) as f64 / seconds.max(1e-9),
         a.out.join("scene.ply").display()

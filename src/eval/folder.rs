@@ -60,6 +60,10 @@ pub struct EvalConfig {
     pub lpips_min_side: usize,
     pub fid: Option<PathBuf>,
     pub fid_input: NetworkInput,
+    /// Score each render after mapping it through the affine color map (scene::exposure) fitted
+    /// to the ground truth on the pixels outside the mask: the view's exposure, which a scene
+    /// trained on photos of varying exposure cannot know, leaves the score.
+    pub fit_exposure: bool,
 }
 
 fn load_mask(path: &Path, labels: &[u8], w: u32, h: u32) -> Result<Vec<bool>> {
@@ -140,7 +144,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
     let (mut d_rel, mut d_sq, mut d_n) = (0f64, 0f64, 0usize);
     for stem in &stems {
         let rpath = find_image(&cfg.renders, stem).unwrap();
-        let (w, h, render) = load_rgb(&rpath)?;
+        let (w, h, mut render) = load_rgb(&rpath)?;
         let (wu, hu) = (w as usize, h as usize);
         let gpath = find_image(&cfg.gt, stem)
             .ok_or_else(|| anyhow!("{}: no ground truth image for render {stem}", cfg.gt.display()))?;
@@ -148,6 +152,11 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         let mpath = find_image(&cfg.masks, stem)
             .ok_or_else(|| anyhow!("{}: no mask for render {stem}", cfg.masks.display()))?;
         let mask = load_mask(&mpath, &cfg.labels, w, h)?;
+        if cfg.fit_exposure {
+            let known: Vec<bool> = mask.iter().map(|&m| !m).collect();
+            let map = crate::scene::exposure::ColorAffine::fit(&render, &gt, Some(&known));
+            render = map.apply(&render).into_iter().map(|v| v.clamp(0.0, 1.0)).collect();
+        }
         let (sm, sb, sf) = (
             mask_scores(&render, &gt, &mask, wu, hu),
             bbox_scores(&render, &gt, &mask, wu, hu),
@@ -231,6 +240,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         "masks": cfg.masks,
         "labels": cfg.labels,
         "protocol": cfg.protocol,
+        "exposure": if cfg.fit_exposure { "fitted per view on the pixels outside the mask" } else { "raw" },
         "synth_ground_truth": truth.as_ref().map(|t| json!({ "images": t.images, "exact": t.exact })),
         "headline": headline,
         "mask": mean_scores(&m_mask),

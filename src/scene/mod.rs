@@ -4,6 +4,7 @@ pub mod builtin;
 pub mod camera;
 pub mod colmap;
 pub mod dataset;
+pub mod exposure;
 pub mod lens;
 pub mod ply;
 pub mod undistort;

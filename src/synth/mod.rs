@@ -50,9 +50,20 @@ pub struct SynthConfig {
     /// Lens distortion k1, k2, p1, p2 of every view (COLMAP's OPENCV model; all 0: a pinhole):
     /// the photos, masks and ground truth are ray-cast through it, and the model says OPENCV.
     pub distortion: [f64; 4],
+    /// Each view's photos (images/ and its ground truth) are multiplied per channel by a gain
+    /// drawn uniformly from [1 - x, 1 + x] (0: none), as a phone's exposure and white balance
+    /// change from shot to shot; synth.json lists the gains (`exposure_gains`).
+    pub exposure_jitter: f64,
 }
 
 impl SynthConfig {
+    /// Each view's per-channel exposure gains (all 1 without jitter), from their own random
+    /// stream so that everything else a seed makes stays the same.
+    pub fn exposure_gains(&self) -> Vec<[f64; 3]> {
+        let mut rng = Rng::new(self.seed ^ 0x6578_706f_7375_7265);
+        (0..self.views).map(|_| std::array::from_fn(|_| 1.0 + self.exposure_jitter * rng.range(-1.0, 1.0))).collect()
+    }
+
     /// The views' lens.
     pub fn lens(&self) -> Lens {
         let [k1, k2, p1, p2] = self.distortion;
@@ -232,11 +243,25 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     let mut without_subset = Vec::new();
     let kept: Vec<Object> = objects.iter().filter(|o| !cfg.gt_without.contains(&o.label)).cloned().collect();
     let lens = cfg.lens();
+    let gains = cfg.exposure_gains();
+    // what the view's camera records: the light through its exposure gains, saturating at white
+    let photograph = |mut v: ViewRender, gain: [f64; 3]| {
+        let hw = v.depth.len();
+        for (c, g) in gain.iter().enumerate() {
+            for x in &mut v.rgb[c * hw..(c + 1) * hw] {
+                *x = (*x as f64 * g).min(1.0) as f32;
+            }
+        }
+        v
+    };
     for (i, cam) in cameras.iter().enumerate() {
-        with_objects.push(render_view_through(cam, lens, &objects, cfg.seed, cfg.supersample));
-        background.push(render_view_through(cam, lens, &[], cfg.seed, cfg.supersample));
+        let shoot = |objects: &[Object]| {
+            photograph(render_view_through(cam, lens, objects, cfg.seed, cfg.supersample), gains[i])
+        };
+        with_objects.push(shoot(&objects));
+        background.push(shoot(&[]));
         if subset_dir.is_some() {
-            without_subset.push(render_view_through(cam, lens, &kept, cfg.seed, cfg.supersample));
+            without_subset.push(shoot(&kept));
         }
         progress(i + 1, 2 * cameras.len());
     }
@@ -265,7 +290,10 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     }
     let points = capture_files::write_colmap(cfg, &cameras, &with_objects, &train, out, &mut rng)?;
     capture_files::write_transforms(cfg, &cameras, &points, out)?;
-    let meta = serde_json::json!({ "config": cfg, "objects": objects, "test_views": (0..cameras.len()).filter(|&i| is_test_view(i)).collect::<Vec<_>>() });
+    let mut meta = serde_json::json!({ "config": cfg, "objects": objects, "test_views": (0..cameras.len()).filter(|&i| is_test_view(i)).collect::<Vec<_>>() });
+    if cfg.exposure_jitter != 0.0 {
+        meta["exposure_gains"] = serde_json::json!(gains);
+    }
     let text = serde_json::to_string_pretty(&meta)?;
     write_atomic(&out.join("synth.json"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
     Ok(objects)

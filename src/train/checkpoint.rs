@@ -1,6 +1,7 @@
 //! Training checkpoints: `checkpoint/` holds scene.ply, the Adam moments (moments.bin: per group,
 //! length as u64 then m and v as little-endian f32) and state.json (step, config). The folder is
-//! written as `checkpoint.tmp/` and swapped in by renames, so a kill at any point leaves either the
+//! and, when training learns exposure maps, exposure.json (the maps; their Adam moments start over
+//! on resume, at the decayed rate). The folder is written as `checkpoint.tmp/` and swapped in by renames, so a kill at any point leaves either the
 //! previous or the new checkpoint complete.
 
 use super::trainer::{TrainConfig, Trainer};
@@ -49,6 +50,9 @@ fn write_files(trainer: &Trainer, tmp: &Path) -> Result<()> {
         }
         Ok(())
     })?;
+    if let Some(e) = trainer.exposure_file()? {
+        e.write(&tmp.join("exposure.json"))?;
+    }
     let state = serde_json::to_string_pretty(&State { step: trainer.step, config: trainer.cfg.clone() })?;
     crate::io::write_atomic(&tmp.join("state.json"), |w| w.write_all(state.as_bytes()).map_err(Into::into))
 }
@@ -59,6 +63,7 @@ pub struct Checkpoint {
     pub step: u32,
     pub config: TrainConfig,
     pub moments: Vec<(Vec<f32>, Vec<f32>)>,
+    pub exposures: Option<crate::scene::exposure::Exposures>,
 }
 
 /// Loads the newest complete checkpoint in `out` (`checkpoint/`, or `checkpoint.old/` when a kill
@@ -93,5 +98,8 @@ pub fn load(out: &Path) -> Result<Option<Checkpoint>> {
         pos += 8 * n;
         moments.push((m, v));
     }
-    Ok(Some(Checkpoint { scene, step: state.step, config: state.config, moments }))
+    let exposure_path = dir.join("exposure.json");
+    let exposures =
+        exposure_path.exists().then(|| crate::scene::exposure::Exposures::read(&exposure_path)).transpose()?;
+    Ok(Some(Checkpoint { scene, step: state.step, config: state.config, moments, exposures }))
 }

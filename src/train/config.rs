@@ -54,6 +54,23 @@ pub struct TrainConfig {
     /// raises it for the same reason as `color_lr_gain`.
     #[arg(skip = 1.0)]
     pub shape_lr_gain: f32,
+    /// Learn a per-view affine color map (per-channel gain and bias, or --exposure-model, train/exposure.rs) applied to the
+    /// render before each training view's loss, for captures whose exposure or white balance
+    /// changes from shot to shot (phones). Never baked into the scene; written to exposure.json.
+    #[arg(long)]
+    pub exposure: bool,
+    /// What each view's exposure map may change: gain-bias (per-channel gain and bias) or affine
+    /// (a 3x3 color matrix and bias).
+    #[arg(long, value_enum, default_value_t, requires = "exposure")]
+    pub exposure_model: super::exposure::ExposureModel,
+    /// Adam learning rate of the exposure maps at the start; it decays exponentially to a tenth
+    /// by the last iteration.
+    #[arg(long, default_value_t = 0.02, requires = "exposure")]
+    pub exposure_lr: f32,
+    /// Weight of the pull of every exposure map toward identity (|A - I|^2 + |b|^2 added to the
+    /// loss): it fixes the common exposure the scene's colors settle at.
+    #[arg(long, default_value_t = 0.001, requires = "exposure")]
+    pub exposure_reg: f32,
 }
 
 crate::default_from_flags!(TrainConfig);

@@ -3,6 +3,7 @@
 pub mod adam;
 pub mod checkpoint;
 pub mod config;
+pub mod exposure;
 pub mod fused;
 pub mod loss;
 pub mod mcmc;

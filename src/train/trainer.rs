@@ -8,6 +8,7 @@
 //! train/mcmc.rs, which also adds regularizer gradients before Adam and a noise pass after it).
 
 use super::adam::{Adam, Moments};
+use super::exposure::ViewExposures;
 use super::fused::{GroupStep, ProjectBackwardAdam};
 use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
 use super::mcmc::{self, McmcPasses, RelocationStats};
@@ -17,6 +18,7 @@ use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
 use crate::rng::Rng;
 use crate::scene::colmap::Point3D;
 use crate::scene::dataset::{Dataset, View};
+use crate::scene::exposure::{ColorAffine, Exposures, ViewExposure};
 use crate::scene::{logit, sh_coeffs, GaussianScene, SH_C0};
 use anyhow::{bail, Result};
 
@@ -97,10 +99,15 @@ impl GroupMoments {
     }
 }
 
+/// Mean image metrics of views against their photos: raw (the render as it is) and with each
+/// view's exposure map fitted by least squares on all its pixels (12 numbers against thousands of
+/// pixels), which scores the scene without its views' exposure differences.
 #[derive(Clone, Debug, Default, serde::Serialize)]
 pub struct Metrics {
     pub psnr: f64,
     pub ssim: f64,
+    pub psnr_exposure_fitted: f64,
+    pub ssim_exposure_fitted: f64,
     pub views: usize,
 }
 
@@ -118,9 +125,13 @@ pub struct Trainer {
     /// Every training image, planar RGB, one after another.
     targets: Buffer,
     target_offsets: Vec<u64>,
+    /// The training views' camera names, in the dataset's order.
+    view_names: Vec<String>,
     /// Per-pixel loss weights of every training view (`set_loss_masks`), one plane per view,
     /// and each view's weight sum.
     loss_masks: Option<(Buffer, Vec<f64>)>,
+    /// Per-view exposure maps (`TrainConfig::exposure`, or fixed ones from `set_exposures`).
+    exposure: Option<ViewExposures>,
     pub step: u32,
     rng: Rng,
     order: Vec<usize>,
@@ -162,6 +173,14 @@ impl Trainer {
         let grads = SceneGradients::new(gpu, &buffers)?;
         let k = sh_coeffs(scene.sh_degree) as u32;
         let backward = Backward::new(gpu, false)?;
+        let exposure = match cfg.exposure {
+            true => {
+                let mut e = ViewExposures::new(gpu, dataset.train.len(), None)?;
+                e.model = cfg.exposure_model;
+                Some(e)
+            }
+            false => None,
+        };
         Ok(Trainer {
             gpu: gpu.clone(),
             extent: dataset.extent,
@@ -173,7 +192,9 @@ impl Trainer {
             adam: Adam::new(gpu)?,
             targets: Buffer::from_slice(gpu, "training images", &all)?,
             target_offsets,
+            view_names: dataset.train.iter().map(|v| v.camera.name.clone()).collect(),
             loss_masks: None,
+            exposure,
             step: 0,
             rng: Rng::new(cfg.seed),
             order: Vec::new(),
@@ -224,9 +245,55 @@ impl Trainer {
         Ok(())
     }
 
+    /// Applies `maps` (one per training view, in the dataset's order) to the renders before the
+    /// loss, learning them further when `learn` (the refinement of a removal passes the trained
+    /// scene's, fixed).
+    pub fn set_exposures(&mut self, maps: &[ColorAffine], learn: bool) -> Result<()> {
+        let mut e = ViewExposures::new(&self.gpu, self.target_offsets.len(), Some(maps))?;
+        e.learn = learn;
+        e.model = self.cfg.exposure_model;
+        self.exposure = Some(e);
+        Ok(())
+    }
+
+    /// The training views' exposure maps, when there are any.
+    pub fn exposures(&self) -> Result<Option<Vec<ColorAffine>>> {
+        self.exposure.as_ref().map(|e| e.download()).transpose()
+    }
+
+    /// The training views' exposure maps by view name (exposure.json), when there are any.
+    pub fn exposure_file(&self) -> Result<Option<Exposures>> {
+        Ok(self.exposures()?.map(|maps| Exposures {
+            views: self
+                .view_names
+                .iter()
+                .zip(maps)
+                .map(|(name, map)| ViewExposure { name: name.clone(), map })
+                .collect(),
+        }))
+    }
+
+    /// Continues learning the maps of `file` (a checkpoint's), matched to the training views by
+    /// name (identity for a view it does not name).
+    pub fn resume_exposures(&mut self, file: &Exposures) -> Result<()> {
+        let maps: Vec<ColorAffine> =
+            self.view_names.iter().map(|n| file.get(n).copied().unwrap_or(ColorAffine::IDENTITY)).collect();
+        self.set_exposures(&maps, true)
+    }
+
+    /// Fraction of the run done, for the decaying learning rates.
+    fn progress(&self) -> f64 {
+        (self.step as f64 / self.cfg.iters.max(1) as f64).min(1.0)
+    }
+
     fn position_lr(&self) -> f32 {
-        let t = (self.step as f64 / self.cfg.iters.max(1) as f64).min(1.0);
+        let t = self.progress();
         ((LR_POSITION_INIT.ln() * (1.0 - t) + LR_POSITION_FINAL.ln() * t).exp() * self.extent) as f32
+    }
+
+    /// The exposure maps' rate: `exposure_lr` decaying exponentially to a tenth.
+    fn exposure_lr(&self) -> f32 {
+        (self.cfg.exposure_lr as f64 * 0.1f64.powf(self.progress())) as f32
     }
 
     /// Learning rates of the SH DC coefficient and of the higher bands.
@@ -277,15 +344,26 @@ impl Trainer {
         if !fused {
             self.grads.record_zero_parameters(&mut rec);
         }
+        let (width, height) = (view.camera.width, view.camera.height);
+        let rendered = match self.exposure.as_mut() {
+            Some(e) => e.record_apply(&mut rec, outputs.rgb, vi, width * height)?,
+            None => outputs.rgb,
+        };
         let inputs = LossInputs {
-            render: outputs.rgb,
+            render: rendered,
             target: &self.targets,
             target_offset: self.target_offsets[vi],
             mask: self.loss_masks.as_ref().map(|(b, sums)| (b, self.target_offsets[vi] / 3, sums[vi])),
         };
-        self.loss.record(&mut rec, view.camera.width, view.camera.height, &inputs)?;
-        let upstream =
-            PixelGradients { rgb: self.loss.dl_drgb(), alpha: None, depth: None, expected_depth: None, features: None };
+        self.loss.record(&mut rec, width, height, &inputs)?;
+        let exposure_lr = self.exposure_lr();
+        let dl_drgb = match self.exposure.as_mut() {
+            Some(e) => {
+                e.record_backward(&mut rec, outputs.rgb, self.loss.dl_drgb(), vi, exposure_lr, self.cfg.exposure_reg)?
+            }
+            None => self.loss.dl_drgb(),
+        };
+        let upstream = PixelGradients { rgb: dl_drgb, alpha: None, depth: None, expected_depth: None, features: None };
         let render_params = self.raster.params_buffer();
         if fused {
             self.backward.record_to_projected(&mut rec, render_params, &frame.params, &upstream, &self.grads)?;
@@ -492,16 +570,23 @@ impl Trainer {
             sh_degree: Some(self.active_sh_degree()),
             ..Default::default()
         };
+        let n = views.len() as f64;
         for v in views {
             let out = self.raster.render(&self.scene, &v.camera, &settings)?;
-            let x: Vec<f64> = out.rgb.iter().map(|&c| c.clamp(0.0, 1.0) as f64).collect();
-            let y: Vec<f64> = v.image.iter().map(|&c| c as f64).collect();
-            let mse = x.iter().zip(&y).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / x.len() as f64;
-            metrics.psnr += 10.0 * (1.0 / mse.max(1e-12)).log10();
-            metrics.ssim += loss_ref::ssim(&x, &y, out.width as usize, out.height as usize, None);
+            let (w, h) = (out.width as usize, out.height as usize);
+            let clamped: Vec<f32> = out.rgb.iter().map(|&c| c.clamp(0.0, 1.0)).collect();
+            let fitted = ColorAffine::fit(&clamped, &v.image, None).apply(&clamped);
+            for (rgb, psnr, ssim) in [
+                (&clamped, &mut metrics.psnr, &mut metrics.ssim),
+                (&fitted, &mut metrics.psnr_exposure_fitted, &mut metrics.ssim_exposure_fitted),
+            ] {
+                let x: Vec<f64> = rgb.iter().map(|&c| c.clamp(0.0, 1.0) as f64).collect();
+                let y: Vec<f64> = v.image.iter().map(|&c| c as f64).collect();
+                let mse = x.iter().zip(&y).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / x.len() as f64;
+                *psnr += 10.0 * (1.0 / mse.max(1e-12)).log10() / n;
+                *ssim += loss_ref::ssim(&x, &y, w, h, None) / n;
+            }
         }
-        metrics.psnr /= views.len() as f64;
-        metrics.ssim /= views.len() as f64;
         Ok(metrics)
     }
 
