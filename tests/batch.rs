@@ -48,7 +48,7 @@ fn setup(name: &str, train_iters: u32) -> (PathBuf, PathBuf) {
     {{"name": "a", "data": "scenes/s0", "masks": "object_mask", "labels": [1, 2]}},
     {{"name": "b", "data": "scenes/s1", "masks": "object_mask", "labels": [1],
       "ground_truth": {{"images": "scenes/s1/without_1/images", "masks": "scenes/s1/object_mask", "synth": true}},
-      "options": {{"train": ["--iters", "{}"]}}}}
+      "options": {{"train": ["--iters", "{}", "--exposure"]}}}}
   ]
 }}"#,
         train_iters + 10
@@ -78,6 +78,12 @@ fn one_entry_end_to_end_then_skipped_then_reported() {
     let metrics: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("train/metrics.json")).unwrap()).unwrap();
     assert_eq!(metrics["iterations"], 50);
+    // the entry's --exposure training left its maps, and its removal took them
+    let maps: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("train/exposure.json")).unwrap()).unwrap();
+    assert_eq!(maps["views"].as_array().unwrap().len(), 7);
+    let marker = std::fs::read_to_string(out.join(".batch/remove.json")).unwrap();
+    assert!(marker.contains("exposure.json"), "{marker}");
     let eval: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("eval.json")).unwrap()).unwrap();
     assert!(eval["mask"]["psnr"].as_f64().unwrap() > 5.0);
 

@@ -165,3 +165,28 @@ fn training_on_the_distorted_capture_matches_the_pinhole_capture() {
     // than the pinhole ones, so the lens may not cost more than 0.3 dB but may come out ahead
     assert!(undistorted >= pinhole - 0.3, "pinhole {pinhole:.2} dB, undistorted {undistorted:.2} dB");
 }
+
+/// The removal's ground-truth scoring of an undistorted capture: the synth's object-free truth,
+/// stored in the photos' distorted frame, is undistorted like the photos, so a render in the
+/// pinhole frame that equals the truth scores high inside the objects' silhouettes (which are
+/// undistorted by the nearest pixel too), and the same render against the truth left distorted
+/// is refused for its size.
+#[test]
+fn ground_truth_of_an_undistorted_capture_is_scored_in_the_pinhole_frame() {
+    let dir = common::scratch_dir("undistort_ground_truth");
+    let data = dir.join("data");
+    let cfg = room(320, 240, 9, 4, 4, [-0.08, 0.015, 0.001, -0.0015]);
+    let objects = generate(&cfg, &data, &|_, _| {}).unwrap();
+    let labels: Vec<u8> = objects.iter().map(|o| o.label).collect();
+    let ds = load(&data, "images", 1).unwrap();
+    let cameras: Vec<_> = ds.test.iter().map(|v| v.camera.clone()).collect();
+    let frames: Vec<_> = ds.test.iter().map(|v| v.undistortion.as_deref()).collect();
+    assert!(!cameras.is_empty() && frames.iter().all(|f| f.is_some()));
+    // the perfect removal: the room ray-cast without the objects through the pinhole cameras
+    let renders: Vec<Vec<f32>> = cameras.iter().map(|c| render_view(c, &[], cfg.seed, cfg.supersample).rgb).collect();
+    let m = cogeo::eval::synth_metrics(&data, &cameras, &frames, &renders, &labels).unwrap().unwrap();
+    eprintln!("a perfect removal scored against the undistorted truth: masked PSNR {:.2} dB", m.masked_psnr);
+    assert!(m.views == cameras.len() && m.masked_psnr > 30.0, "{m:?}");
+    let unframed = vec![None; cameras.len()];
+    assert!(cogeo::eval::synth_metrics(&data, &cameras, &unframed, &renders, &labels).is_err());
+}

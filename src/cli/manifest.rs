@@ -219,7 +219,12 @@ impl Entry {
                     (None, Some(names)) => Chosen::Names(names),
                     _ => bail!("give exactly one of \"labels\" and \"remove_names\""),
                 };
-                pipeline::remove(&layout.tagged(), &capture, chosen, &layout.removal())
+                let mut v = pipeline::remove(&layout.tagged(), &capture, chosen, &layout.removal());
+                // a training that learned exposure maps hands them on
+                if self.options(m, Step::Train).iter().any(|o| o.iter().any(|f| f == "--exposure")) {
+                    v.extend(["--exposure".into(), layout.exposure().to_string_lossy().into_owned()]);
+                }
+                v
             }
             Step::Eval => {
                 let gt = self.ground_truth.as_ref().ok_or_else(|| anyhow!("no ground_truth"))?;

@@ -214,11 +214,11 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     let held_out = render_held_out(&gpu, &scene, &removal.scene, &test_cams, opts.background)?;
     write_views(&out.join("test_before"), &test_cams, &held_out.before)?;
     write_views(&out.join("test_after"), &test_cams, &held_out.after)?;
-    // synth ground truth is stored at the dataset's resolution and in its photos' frame: a
-    // downscaled run, or one whose photos were undistorted, is not scored (yet)
-    let undistorted = data.train.iter().chain(&data.test).any(|v| v.undistortion.is_some());
-    let scores = if a.capture.downscale == 1 && !undistorted {
-        score_against_synth(&a.data, &labels, &test_cams, &held_out, &cameras, v)?
+    // synth ground truth is stored at the dataset's resolution and in its photos' frame: it is
+    // undistorted as the photos were; a downscaled run is not scored
+    let frames: Vec<_> = data.test.iter().map(|v| v.undistortion.as_deref()).collect();
+    let scores = if a.capture.downscale == 1 {
+        score_against_synth(&a.data, &labels, &test_cams, &frames, &held_out, &cameras, v)?
     } else {
         GroundTruthScores::default()
     };

@@ -29,6 +29,10 @@ pub struct RunArgs {
     /// Highest SH degree of training.
     #[arg(long, default_value_t = TrainConfig::default().sh_degree)]
     pub sh_degree: u32,
+    /// Learn per-view exposure maps in training (`cogeo train --exposure`) and hand them to the
+    /// removal (`cogeo remove --exposure`), for photos whose exposure or white balance varies.
+    #[arg(long)]
+    pub exposure: bool,
     /// Tagging method.
     #[arg(long, value_enum, default_value_t)]
     pub tag_method: Method,
@@ -52,6 +56,9 @@ pub fn run(a: RunArgs) -> Result<()> {
     train.extend(["--iters".into(), a.iters.to_string(), "--sh-degree".into(), a.sh_degree.to_string()]);
     train.extend(["--checkpoint-every".into(), "0".into(), "--seed".into(), seed.clone()]);
     train.extend(["--background".into(), background]);
+    if a.exposure {
+        train.push("--exposure".into());
+    }
     let masks = a.masks.to_string_lossy().into_owned();
     let method = clap::ValueEnum::to_possible_value(&a.tag_method).expect("every method has a name");
     let objects = Objects::Masks(&masks);
@@ -61,7 +68,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     // the user's flags replace its defaults
     let labels = a.removal.labels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(",");
     let chosen = if a.removal.labels.is_empty() { Chosen::Names(&a.removal.prompt) } else { Chosen::Labels(&labels) };
-    let remove = pipeline::remove(&layout.tagged(), &capture, chosen, &layout.removal());
+    let mut remove = pipeline::remove(&layout.tagged(), &capture, chosen, &layout.removal());
+    if a.exposure {
+        remove.extend(["--exposure".into(), layout.exposure().to_string_lossy().into_owned()]);
+    }
     let steps = [("train", train), ("tag", tag), ("remove", remove)];
     for (i, (name, mut args)) in steps.into_iter().enumerate() {
         eprintln!("== {}/3 {name}", i + 1);

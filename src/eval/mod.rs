@@ -72,6 +72,7 @@ pub struct SynthMetrics {
 pub fn synth_metrics(
     data: &std::path::Path,
     cameras: &[crate::scene::Camera],
+    frames: &[Option<&crate::scene::undistort::Undistortion>],
     renders: &[Vec<f32>],
     removed_labels: &[u8],
 ) -> anyhow::Result<Option<SynthMetrics>> {
@@ -81,17 +82,27 @@ pub fn synth_metrics(
         return Ok(None);
     }
     let mut m = SynthMetrics::default();
-    for (cam, render) in cameras.iter().zip(renders) {
+    for ((cam, render), frame) in cameras.iter().zip(renders).zip(frames) {
         let (w, h) = (cam.width as usize, cam.height as usize);
         let gt_path = find_image(&gt_dir, &cam.name)
             .ok_or_else(|| anyhow::anyhow!("{}: no ground truth for {}", gt_dir.display(), cam.name))?;
         let (gw, gh, gt) = load_rgb(&gt_path)?;
-        if (gw as usize, gh as usize) != (w, h) {
-            anyhow::bail!("{}: {gw}x{gh}, but the render is {w}x{h}", gt_path.display());
+        // the ground truth is stored in the photos' frame: undistorted like the photo was
+        let source = frame.map_or((w, h), |u| (u.source.0 as usize, u.source.1 as usize));
+        if (gw as usize, gh as usize) != source {
+            anyhow::bail!("{}: {gw}x{gh}, but the view's photo is {}x{}", gt_path.display(), source.0, source.1);
         }
+        let gt = match frame {
+            Some(u) => u.rgb(&gt),
+            None => gt,
+        };
         let mask_path = find_image(&mask_dir, &cam.name)
             .ok_or_else(|| anyhow::anyhow!("{}: no object mask for {}", mask_dir.display(), cam.name))?;
         let labels = crate::io::read_image(&mask_path)?.to_luma8().into_raw();
+        let labels = match frame {
+            Some(u) => u.labels(&labels),
+            None => labels,
+        };
         let mask: Vec<bool> = labels.iter().map(|l| removed_labels.contains(l)).collect();
         let Some(p) = masked_psnr(render, &gt, &mask) else { continue };
         m.masked_psnr += p;

@@ -6,6 +6,7 @@ use super::ViewResult;
 use crate::eval::{synth_depth_error, synth_metrics, SynthMetrics};
 use crate::gpu::Gpu;
 use crate::render::render_rgb;
+use crate::scene::undistort::Undistortion;
 use crate::scene::{Camera, GaussianScene};
 use anyhow::Result;
 use std::path::Path;
@@ -45,21 +46,27 @@ pub struct DepthError {
 }
 
 /// Scores a removal of `labels` on the dataset at `data` when it is a `cogeo synth` dataset (both
-/// entries None otherwise): `test_cameras` with their renders after removal, the edited
-/// `cameras` with their `views`.
+/// entries None otherwise): `test_cameras` (with the undistortion of their photos, `frames`)
+/// with their renders after removal, the edited `cameras` with their `views`. The fill's depth
+/// is scored only where the photos needed no undistortion (the true depth is not resampled).
 pub fn score_against_synth(
     data: &Path,
     labels: &[u8],
     test_cameras: &[Camera],
+    frames: &[Option<&Undistortion>],
     held_out: &HeldOut,
     cameras: &[Camera],
     views: &[ViewResult],
 ) -> Result<GroundTruthScores> {
     let depths: Vec<Vec<f32>> = views.iter().map(|v| v.depth.clone()).collect();
     let fills: Vec<Vec<bool>> = views.iter().map(|v| v.fill.clone()).collect();
+    let pinhole = frames.iter().all(|f| f.is_none());
     Ok(GroundTruthScores {
-        held_out_vs_ground_truth: synth_metrics(data, test_cameras, &held_out.after, labels)?,
-        fill_depth_vs_ground_truth: synth_depth_error(data, labels, cameras, &depths, &fills)?
-            .map(|(abs_rel, rmse)| DepthError { abs_rel, rmse }),
+        held_out_vs_ground_truth: synth_metrics(data, test_cameras, frames, &held_out.after, labels)?,
+        fill_depth_vs_ground_truth: match pinhole {
+            true => synth_depth_error(data, labels, cameras, &depths, &fills)?
+                .map(|(abs_rel, rmse)| DepthError { abs_rel, rmse }),
+            false => None,
+        },
     })
 }
