@@ -36,6 +36,45 @@ impl Undistortion {
         Ok(Undistortion { source, lens: intrinsics(distorted, lens), pinhole: pinhole_camera(distorted, lens, what)? })
     }
 
+    /// The alternative to COLMAP's choice: a pinhole image holding the whole photo (the smallest
+    /// rectangle around every ray it saw, so its corners lie beyond the photo), to be trained with
+    /// `valid_mask` as loss weights. `tests/undistort.rs` measures it against the cropped frame;
+    /// the loader keeps the crop (no stage after training would need a mask).
+    pub fn whole_frame(distorted: &Camera, lens: Lens, what: &str) -> Result<Undistortion> {
+        let k = intrinsics(distorted, lens);
+        let (w, h) = (distorted.width as f64, distorted.height as f64);
+        let border = (0..=distorted.width)
+            .flat_map(|i| [(i as f64, 0.0), (i as f64, h)])
+            .chain((0..=distorted.height).flat_map(|i| [(0.0, i as f64), (w, i as f64)]));
+        let (mut left, mut right, mut top, mut bottom) =
+            (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+        for (x, y) in border {
+            let Some((u, v)) = k.unproject(x, y) else {
+                bail!("{what}: the lens model cannot be inverted along the image border")
+            };
+            (left, right, top, bottom) = (left.min(u), right.max(u), top.min(v), bottom.max(v));
+        }
+        let (fx, fy) = (k.fx, k.fy);
+        let (pw, ph) = (((right - left) * fx).ceil() as u32, ((bottom - top) * fy).ceil() as u32);
+        let pinhole = Camera { width: pw, height: ph, fx, fy, cx: -left * fx, cy: -top * fy, ..distorted.clone() };
+        Ok(Undistortion { source: (distorted.width, distorted.height), lens: k, pinhole })
+    }
+
+    /// 1 where a pinhole pixel's ray lands inside the photo, 0 where the photo did not see it.
+    pub fn valid_mask(&self) -> Vec<f32> {
+        let (w, h) = (self.source.0 as f64, self.source.1 as f64);
+        (0..self.pixels())
+            .map(|i| {
+                let (x, y) = self.source_position(i);
+                if (0.0..=w).contains(&x) && (0.0..=h).contains(&y) {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
     /// Where the ray of pinhole pixel `i` (row-major) lands in the photo (pixel centers at +0.5).
     fn source_position(&self, i: usize) -> (f64, f64) {
         let p = &self.pinhole;
