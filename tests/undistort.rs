@@ -281,7 +281,7 @@ fn cropped_frame_trains_no_worse_than_the_whole_frame_with_a_valid_mask() {
         view.image = frame.rgb(&photo);
         view.camera = frame.pinhole.clone();
         let valid = frame.valid_mask();
-        assert!(valid.iter().any(|&v| v == 0.0), "the whole frame has no corner beyond the photo");
+        assert!(valid.contains(&0.0), "the whole frame has no corner beyond the photo");
         if k < cropped.train.len() {
             masks.push(valid);
         } else {
