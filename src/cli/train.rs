@@ -114,6 +114,7 @@ pub fn run(a: TrainArgs) -> Result<()> {
     }
     bar.finish();
     let seconds = start.elapsed().as_secs_f64();
+    t.settle_exposure_gauge()?;
     let scene = t.download_scene()?;
     checkpoint::save(&t, &a.out)?;
     let test = t.evaluate(&data.test)?;

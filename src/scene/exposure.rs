@@ -100,6 +100,46 @@ impl ColorAffine {
         ColorAffine { matrix, bias: self.apply_pixel(first.bias) }
     }
 
+    /// The affine mean of `maps` (identity for none).
+    pub fn mean(maps: &[ColorAffine]) -> ColorAffine {
+        if maps.is_empty() {
+            return ColorAffine::IDENTITY;
+        }
+        let n = maps.len() as f64;
+        let mut m = ColorAffine { matrix: [[0.0; 3]; 3], bias: [0.0; 3] };
+        for a in maps {
+            for r in 0..3 {
+                for c in 0..3 {
+                    m.matrix[r][c] += a.matrix[r][c] / n;
+                }
+                m.bias[r] += a.bias[r] / n;
+            }
+        }
+        m
+    }
+
+    /// Maps the colors of `scene` (every SH band; the bias goes to the DC term, which carries the
+    /// renderer's +0.5) so that it renders `self(color)` wherever it rendered `color` (up to the
+    /// renderer's clamp at 0).
+    pub fn map_scene_colors(&self, scene: &mut crate::scene::GaussianScene) {
+        use crate::scene::{sh_coeffs, SH_C0};
+        let k = sh_coeffs(scene.sh_degree);
+        for g in scene.sh.chunks_mut(3 * k) {
+            for coeff in 0..k {
+                let c = [0, 1, 2].map(|ch| g[3 * coeff + ch] as f64);
+                let mapped: [f64; 3] = if coeff == 0 {
+                    let color = self.apply_pixel(c.map(|v| SH_C0 * v + 0.5));
+                    color.map(|v| (v - 0.5) / SH_C0)
+                } else {
+                    std::array::from_fn(|r| (0..3).map(|x| self.matrix[r][x] * c[x]).sum())
+                };
+                for ch in 0..3 {
+                    g[3 * coeff + ch] = mapped[ch] as f32;
+                }
+            }
+        }
+    }
+
     /// The least-squares map from `render` to `photo` (planar RGB) over the pixels where `known`
     /// (all when None), in f64: per channel, the normal equations of [x 1] w = y. Identity when
     /// fewer than 16 pixels count or the colors span too little to pin the map down.

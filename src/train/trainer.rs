@@ -273,6 +273,25 @@ impl Trainer {
         }))
     }
 
+    /// Moves the common part of the exposure maps into the scene: with M their mean, the scene's
+    /// colors become M(color) and each map A_v becomes A_v M^-1, so every view renders through its
+    /// map exactly as before while the maps average to identity and the scene, rendered without
+    /// any, shows the views' common exposure. Training alone leaves that common part wherever the
+    /// early steps put it: no image depends on it, and the pull toward identity is too weak to
+    /// move it. Call at the end of training (the Adam moments of the colors are not remapped).
+    pub fn settle_exposure_gauge(&mut self) -> Result<()> {
+        let Some(maps) = self.exposures()? else { return Ok(()) };
+        let mean = ColorAffine::mean(&maps);
+        let Some(inverse) = mean.inverse() else { bail!("the exposure maps' mean is singular") };
+        let mut scene = self.download_scene()?;
+        mean.map_scene_colors(&mut scene);
+        let keep: Vec<Option<usize>> = (0..scene.len()).map(Some).collect();
+        self.replace_scene(&scene, &keep)?;
+        let learn = self.exposure.as_ref().is_some_and(|e| e.learn);
+        let settled: Vec<ColorAffine> = maps.iter().map(|a| a.after(&inverse)).collect();
+        self.set_exposures(&settled, learn)
+    }
+
     /// Continues learning the maps of `file` (a checkpoint's), matched to the training views by
     /// name (identity for a view it does not name).
     pub fn resume_exposures(&mut self, file: &Exposures) -> Result<()> {
