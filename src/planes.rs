@@ -46,30 +46,31 @@ pub fn center(i: usize, w: usize) -> (f64, f64) {
 pub const PLANE_TOLERANCE: f64 = 0.03;
 const RANSAC_TRIALS: usize = 256;
 
-/// Solves the 3x3 system m z = r (Gaussian elimination with partial pivoting); None if singular.
-pub fn solve3(mut m: [[f64; 3]; 3], mut r: [f64; 3]) -> Option<[f64; 3]> {
+/// Solves the N x N system m z = r (Gaussian elimination with partial pivoting); None if singular
+/// (a pivot below 1e-12 of the largest entry).
+pub fn solve<const N: usize>(mut m: [[f64; N]; N], mut r: [f64; N]) -> Option<[f64; N]> {
     let scale = m.iter().flatten().fold(0f64, |s, v| s.max(v.abs()));
     if scale == 0.0 {
         return None;
     }
-    for col in 0..3 {
-        let p = (col..3).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
+    for col in 0..N {
+        let p = (col..N).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
         if m[p][col].abs() < 1e-12 * scale {
             return None;
         }
         m.swap(col, p);
         r.swap(col, p);
-        for row in col + 1..3 {
+        for row in col + 1..N {
             let f = m[row][col] / m[col][col];
-            for k in col..3 {
+            for k in col..N {
                 m[row][k] -= f * m[col][k];
             }
             r[row] -= f * r[col];
         }
     }
-    let mut z = [0f64; 3];
-    for row in (0..3).rev() {
-        let s: f64 = (row + 1..3).map(|k| m[row][k] * z[k]).sum();
+    let mut z = [0f64; N];
+    for row in (0..N).rev() {
+        let s: f64 = (row + 1..N).map(|k| m[row][k] * z[k]).sum();
         z[row] = (r[row] - s) / m[row][row];
     }
     Some(z)
@@ -98,7 +99,7 @@ pub fn least_squares(idx: &[usize], disp: &[f32], w: usize, weight: impl Fn(usiz
             r[j] += k * row[j] * disp[i] as f64;
         }
     }
-    let [a, b, c] = solve3(m, r)?;
+    let [a, b, c] = solve(m, r)?;
     Some(Plane { a, b, c: c - a * mx - b * my })
 }
 
@@ -162,7 +163,7 @@ pub fn fit_planes(
                 m[row] = [x, y, 1.0];
                 r[row] = disp[pts[k]] as f64;
             }
-            let Some([a, b, c]) = solve3(m, r) else { continue };
+            let Some([a, b, c]) = solve(m, r) else { continue };
             let p = Plane { a, b, c };
             let n = pts.iter().filter(|&&i| p.residual(i, w, disp[i] as f64) <= tol).count();
             if best.as_ref().is_none_or(|(bn, _)| n > *bn) {

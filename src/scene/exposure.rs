@@ -173,36 +173,12 @@ impl ColorAffine {
                 m[i][i] += ridge;
                 rhs[i] += ridge * if i == c { 1.0 } else { 0.0 };
             }
-            let Some(w) = solve4(m, rhs) else { return ColorAffine::IDENTITY };
+            let Some(w) = crate::planes::solve(m, rhs) else { return ColorAffine::IDENTITY };
             out.matrix[c] = [w[0], w[1], w[2]];
             out.bias[c] = w[3];
         }
         out
     }
-}
-
-/// Gaussian elimination with partial pivoting on a 4x4 system.
-fn solve4(mut m: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
-    for col in 0..4 {
-        let pivot = (col..4).max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))?;
-        if m[pivot][col].abs() < 1e-12 {
-            return None;
-        }
-        m.swap(col, pivot);
-        b.swap(col, pivot);
-        for row in col + 1..4 {
-            let f = m[row][col] / m[col][col];
-            for k in col..4 {
-                m[row][k] -= f * m[col][k];
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    let mut x = [0f64; 4];
-    for row in (0..4).rev() {
-        x[row] = (b[row] - (row + 1..4).map(|k| m[row][k] * x[k]).sum::<f64>()) / m[row][row];
-    }
-    Some(x)
 }
 
 /// One training view's learned map in `exposure.json`.

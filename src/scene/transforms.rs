@@ -204,7 +204,7 @@ fn random_points(cameras: &[Camera]) -> Vec<Point3D> {
             }
         }
     }
-    let target = crate::planes::solve3(m, rhs).unwrap_or_else(|| {
+    let target = crate::planes::solve(m, rhs).unwrap_or_else(|| {
         let n = cameras.len() as f64;
         [0, 1, 2].map(|a| cameras.iter().map(|c| c.center()[a]).sum::<f64>() / n)
     });
