@@ -24,6 +24,9 @@ pub struct EvalArgs {
     pub protocol: cogeo::eval::folder::Protocol,
     /// The `cogeo synth` dataset the renders come from: adds never-seen / seen-elsewhere subsets
     /// (`unseen_mask/`), the leftover-object score (`images/`), and enables --depth and --scene.
+    /// When its cameras have a lens, the ground truth, masks and photos stored in the photos' frame
+    /// are undistorted like the photos were, to meet renders in the pinhole frame (--depth and
+    /// --scene are then not scored: the true depth is not resampled).
     #[arg(long)]
     pub data: Option<PathBuf>,
     /// Rendered depth (camera z) as `<name>.exr`: AbsRel and RMSE inside the mask against the true

@@ -4,6 +4,7 @@
 use super::models::{FidFeatures, Lpips, NetworkInput};
 use super::{bbox_scores, floater_score, frechet_distance, full_scores, leftover_fraction, mask_scores, Scores};
 use crate::scene::dataset::{find_image, load_rgb};
+use crate::scene::undistort::Undistortion;
 use anyhow::{anyhow, bail, Context, Result};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -66,20 +67,43 @@ pub struct EvalConfig {
     pub fit_exposure: bool,
 }
 
-fn load_mask(path: &Path, labels: &[u8], w: u32, h: u32) -> Result<Vec<bool>> {
-    let img = crate::io::read_image(path)?.to_luma8();
-    if img.dimensions() != (w, h) {
-        bail!("{}: mask is {}x{}, the render is {w}x{h}", path.display(), img.width(), img.height());
+/// The undistortion of each view of a capture whose lens is not a pinhole, by view name: the
+/// synth's ground truth, masks and photos are stored in the photos' frame, the renders in the
+/// undistorted pinhole frame (scene/undistort.rs).
+type Frames = std::collections::HashMap<String, Undistortion>;
+
+fn capture_frames(data: &Path) -> Result<Frames> {
+    let model = crate::scene::dataset::read_capture(data)?;
+    let mut frames = Frames::new();
+    for (camera, lens) in model.cameras.iter().zip(&model.lenses).filter(|(_, l)| !l.is_pinhole()) {
+        frames.insert(camera.name.clone(), Undistortion::new(camera, *lens, &camera.name)?);
     }
-    Ok(img.into_raw().iter().map(|&v| if labels.is_empty() { v != 0 } else { labels.contains(&v) }).collect())
+    Ok(frames)
 }
 
-fn load_same_size(path: &Path, w: u32, h: u32, what: &str) -> Result<Vec<f32>> {
+/// Whether an image of `size` read beside a `w` x `h` render is in the photo's frame of
+/// `frame`, to be undistorted into the render's.
+fn photo_frame(frame: Option<&Undistortion>, size: (u32, u32), w: u32, h: u32) -> Option<&Undistortion> {
+    frame.filter(|u| size != (w, h) && size == u.source && (u.pinhole.width, u.pinhole.height) == (w, h))
+}
+
+fn load_mask(path: &Path, labels: &[u8], w: u32, h: u32, frame: Option<&Undistortion>) -> Result<Vec<bool>> {
+    let img = crate::io::read_image(path)?.to_luma8();
+    let raw = match photo_frame(frame, img.dimensions(), w, h) {
+        Some(u) => u.labels(img.as_raw()),
+        None if img.dimensions() == (w, h) => img.into_raw(),
+        None => bail!("{}: mask is {}x{}, the render is {w}x{h}", path.display(), img.width(), img.height()),
+    };
+    Ok(raw.iter().map(|&v| if labels.is_empty() { v != 0 } else { labels.contains(&v) }).collect())
+}
+
+fn load_same_size(path: &Path, w: u32, h: u32, what: &str, frame: Option<&Undistortion>) -> Result<Vec<f32>> {
     let (iw, ih, img) = load_rgb(path)?;
-    if (iw, ih) != (w, h) {
-        bail!("{}: {what} is {iw}x{ih}, the render is {w}x{h}", path.display());
+    match photo_frame(frame, (iw, ih), w, h) {
+        Some(u) => Ok(u.rgb(&img)),
+        None if (iw, ih) == (w, h) => Ok(img),
+        None => bail!("{}: {what} is {iw}x{ih}, the render is {w}x{h}", path.display()),
     }
-    Ok(img)
 }
 
 fn image_stems(dir: &Path) -> Result<Vec<String>> {
@@ -133,6 +157,11 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         let labels = if cfg.labels.is_empty() { (1..=255).collect::<Vec<u8>>() } else { cfg.labels.clone() };
         crate::synth::ground_truth(d, &labels)
     });
+    // a synth capture through a lens: its ground truth is undistorted like its photos were
+    let frames = match &cfg.data {
+        Some(d) => capture_frames(d)?,
+        None => Frames::new(),
+    };
     let mut views = Vec::new();
     let (mut m_mask, mut m_bbox, mut m_full, mut m_unseen, mut m_seen) = (vec![], vec![], vec![], vec![], vec![]);
     let mut m_outside = vec![];
@@ -148,10 +177,11 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         let (wu, hu) = (w as usize, h as usize);
         let gpath = find_image(&cfg.gt, stem)
             .ok_or_else(|| anyhow!("{}: no ground truth image for render {stem}", cfg.gt.display()))?;
-        let gt = load_same_size(&gpath, w, h, "ground truth")?;
+        let frame = frames.get(stem.as_str());
+        let gt = load_same_size(&gpath, w, h, "ground truth", frame)?;
         let mpath = find_image(&cfg.masks, stem)
             .ok_or_else(|| anyhow!("{}: no mask for render {stem}", cfg.masks.display()))?;
-        let mask = load_mask(&mpath, &cfg.labels, w, h)?;
+        let mask = load_mask(&mpath, &cfg.labels, w, h, frame)?;
         if cfg.fit_exposure {
             let known: Vec<bool> = mask.iter().map(|&m| !m).collect();
             let map = crate::scene::exposure::ColorAffine::fit(&render, &gt, Some(&known));
@@ -172,7 +202,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         m_full.push(sf);
         if let (Some(data), Some(truth)) = (&cfg.data, &truth) {
             let upath = truth.unseen.join(format!("{stem}.png"));
-            let unseen = load_mask(&upath, &[], w, h)?;
+            let unseen = load_mask(&upath, &[], w, h, frame)?;
             let inside: Vec<bool> = mask.iter().zip(&unseen).map(|(&m, &u)| m && u).collect();
             let elsewhere: Vec<bool> = mask.iter().zip(&unseen).map(|(&m, &u)| m && !u).collect();
             let (su, se) = (mask_scores(&render, &gt, &inside, wu, hu), mask_scores(&render, &gt, &elsewhere, wu, hu));
@@ -183,7 +213,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
             subsets = Some((inside, elsewhere));
             let ipath = find_image(&data.join("images"), stem)
                 .ok_or_else(|| anyhow!("{}: no image {stem} (with the objects)", data.join("images").display()))?;
-            let with_objects = load_same_size(&ipath, w, h, "image")?;
+            let with_objects = load_same_size(&ipath, w, h, "image", frame)?;
             let left = leftover_fraction(&render, &with_objects, &gt, &mask, cfg.leftover_margin);
             view["leftover"] = json!(left);
             leftovers.extend(left);
@@ -261,6 +291,9 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         _ => not_computed("needs --data and --depth"),
     };
     out["floaters"] = match (&cfg.data, &truth, &cfg.scene) {
+        (Some(_), Some(_), Some(_)) if !frames.is_empty() => {
+            not_computed("the true depth is in the distorted photos' frame")
+        }
         (Some(data), Some(truth), Some(scene_path)) => {
             let scene = crate::scene::ply::read_ply(scene_path)?;
             let ds = crate::scene::dataset::load(data, "images", 1)?;
@@ -272,7 +305,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
                 let (_, _, d) = crate::io::read_exr_channel(&truth.depth.join(format!("{}.exr", c.name)), None)?;
                 let mpath = find_image(&data.join("object_mask"), &c.name)
                     .ok_or_else(|| anyhow!("{}: no object mask for {}", data.join("object_mask").display(), c.name))?;
-                regions.push(load_mask(&mpath, &cfg.labels, c.width, c.height)?);
+                regions.push(load_mask(&mpath, &cfg.labels, c.width, c.height, None)?);
                 depths.push(d);
                 cams.push(c.clone());
             }
