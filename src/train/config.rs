@@ -56,7 +56,9 @@ pub struct TrainConfig {
     pub shape_lr_gain: f32,
     /// Learn a per-view affine color map (per-channel gain and bias, or --exposure-model, train/exposure.rs) applied to the
     /// render before each training view's loss, for captures whose exposure or white balance
-    /// changes from shot to shot (phones). Never baked into the scene; written to exposure.json.
+    /// changes from shot to shot (phones). At the end the maps' common part moves into the scene,
+    /// which then shows the views' mean exposure; each view's own part never does. Written to
+    /// exposure.json, for `cogeo remove --exposure`.
     #[arg(long)]
     pub exposure: bool,
     /// What each view's exposure map may change: gain-bias (per-channel gain and bias) or affine
@@ -68,7 +70,7 @@ pub struct TrainConfig {
     #[arg(long, default_value_t = 0.02, requires = "exposure")]
     pub exposure_lr: f32,
     /// Weight of the pull of every exposure map toward identity (|A - I|^2 + |b|^2 added to the
-    /// loss): it fixes the common exposure the scene's colors settle at.
+    /// loss), which keeps a view's map from absorbing what its photo shows of the scene.
     #[arg(long, default_value_t = 0.001, requires = "exposure")]
     pub exposure_reg: f32,
 }

@@ -2,8 +2,9 @@
 //! has an affine color map y = A_v x + b_v (scene::exposure::ColorAffine) applied to the render
 //! before that view's loss, so a photo taken brighter or warmer than the others is explained by
 //! its camera, not painted into the scene. The maps start at identity, learn by Adam with each
-//! view's own step count, and are pulled toward identity by `reg |A - I|^2 + reg |b|^2`; the
-//! scene's colors therefore settle at the views' common exposure and no map is ever baked in.
+//! view's own step count, and are pulled toward identity by `reg |A - I|^2 + reg |b|^2`. The
+//! maps' common part, which no image depends on, is moved into the scene at the end of training
+//! (`Trainer::settle_exposure_gauge`); each view's own part never is.
 //!
 //! Three passes: exposure_apply.comp (render -> corrected), exposure_backward.comp (dL/dx = A^T
 //! dL/dy for the rasterizer's backward, and per-workgroup partial sums of dL/dA, dL/db),
