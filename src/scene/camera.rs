@@ -199,7 +199,6 @@ pub fn read_cameras_json(path: &Path) -> Result<Vec<Camera>> {
     parse_cameras_json(&data, &path.display().to_string())
 }
 
-/// `read_cameras_json` on the file's bytes (`what` names it in errors).
 /// The world-to-camera rotation and translation (`Camera`'s pose) of a camera whose
 /// camera-to-world rotation (OpenCV axes) is `c2w` and whose center is `center`: R^T and -R^T c.
 pub fn pose_from_camera_to_world(c2w: [[f64; 3]; 3], center: [f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
@@ -210,6 +209,7 @@ pub fn pose_from_camera_to_world(c2w: [[f64; 3]; 3], center: [f64; 3]) -> ([[f64
     (rotation, translation)
 }
 
+/// `read_cameras_json` on the file's bytes (`what` names it in errors).
 pub fn parse_cameras_json(data: &[u8], what: &str) -> Result<Vec<Camera>> {
     let list: Vec<JsonCamera> =
         serde_json::from_slice(data).with_context(|| format!("{what}: not an INRIA cameras.json"))?;

@@ -62,17 +62,13 @@ pub const DEFAULT_IMAGE_FOLDER: &str = "images";
 /// The cameras and points of a capture folder: a COLMAP model (`dir`, `dir/sparse/0`), else a
 /// nerfstudio / instant-ngp `transforms.json` (scene/transforms.rs).
 pub fn read_capture(dir: &Path) -> Result<ColmapModel> {
-    if find_model_dir(dir).is_err() && dir.join(transforms::FILE_NAME).is_file() {
+    if find_model_dir(dir).is_ok() {
+        return read_colmap(dir);
+    }
+    if dir.join(transforms::FILE_NAME).is_file() {
         return transforms::read_transforms(dir);
     }
-    if find_model_dir(dir).is_err() {
-        bail!(
-            "{}: no COLMAP model (cameras.bin/.txt here or in sparse/0) and no {}",
-            dir.display(),
-            transforms::FILE_NAME
-        );
-    }
-    read_colmap(dir)
+    bail!("{}: no COLMAP model (cameras.bin/.txt here or in sparse/0) and no {}", dir.display(), transforms::FILE_NAME)
 }
 
 /// Finds `stem.<ext>` in `dir`.
