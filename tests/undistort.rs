@@ -286,7 +286,6 @@ fn eroded(mask: &[f32], w: usize, r: usize) -> Vec<f32> {
 /// when this was written), so the loader keeps the crop: no later stage then needs a mask.
 #[test]
 fn cropped_frame_trains_no_worse_than_the_whole_frame_with_a_valid_mask() {
-    use cogeo::scene::undistort::Undistortion;
     let gpu = common::gpu();
     let dir = common::scratch_dir("undistort_whole_frame");
     let data = dir.join("opencv");
@@ -301,11 +300,7 @@ fn cropped_frame_trains_no_worse_than_the_whole_frame_with_a_valid_mask() {
     let mut masks = Vec::new();
     let mut test_masks = Vec::new();
     for (k, view) in whole.train.iter_mut().chain(whole.test.iter_mut()).enumerate() {
-        let u = view.undistortion.clone().unwrap();
-        let mut distorted = u.pinhole.clone();
-        (distorted.width, distorted.height) = u.source;
-        (distorted.fx, distorted.fy, distorted.cx, distorted.cy) = (u.lens.fx, u.lens.fy, u.lens.cx, u.lens.cy);
-        let frame = Undistortion::whole_frame(&distorted, u.lens.lens, "test").unwrap();
+        let frame = view.undistortion.as_ref().unwrap().whole_frame("test").unwrap();
         let photo = cogeo::scene::dataset::load_rgb(&view.path).unwrap().2;
         view.image = frame.rgb(&photo);
         view.camera = frame.pinhole.clone();

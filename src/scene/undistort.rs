@@ -36,16 +36,17 @@ impl Undistortion {
         Ok(Undistortion { source, lens: intrinsics(distorted, lens), pinhole: pinhole_camera(distorted, lens, what)? })
     }
 
-    /// The alternative to COLMAP's choice: a pinhole image holding the whole photo (the smallest
-    /// rectangle around every ray it saw, so its corners lie beyond the photo), to be trained with
-    /// `valid_mask` as loss weights. `tests/undistort.rs` measures it against the cropped frame;
-    /// the loader keeps the crop (no stage after training would need a mask).
-    pub fn whole_frame(distorted: &Camera, lens: Lens, what: &str) -> Result<Undistortion> {
-        let k = intrinsics(distorted, lens);
-        let (w, h) = (distorted.width as f64, distorted.height as f64);
-        let border = (0..=distorted.width)
+    /// The alternative to COLMAP's choice for the same photo: a pinhole image holding the whole
+    /// photo (the smallest rectangle around every ray it saw, so its corners lie beyond the photo),
+    /// to be trained with `valid_mask` as loss weights. `tests/undistort.rs` measures it against
+    /// the cropped frame; the loader keeps the crop (no stage after training would need a mask).
+    pub fn whole_frame(&self, what: &str) -> Result<Undistortion> {
+        let k = self.lens;
+        let (width, height) = self.source;
+        let (w, h) = (width as f64, height as f64);
+        let border = (0..=width)
             .flat_map(|i| [(i as f64, 0.0), (i as f64, h)])
-            .chain((0..=distorted.height).flat_map(|i| [(0.0, i as f64), (w, i as f64)]));
+            .chain((0..=height).flat_map(|i| [(0.0, i as f64), (w, i as f64)]));
         let (mut left, mut right, mut top, mut bottom) =
             (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
         for (x, y) in border {
@@ -56,8 +57,8 @@ impl Undistortion {
         }
         let (fx, fy) = (k.fx, k.fy);
         let (pw, ph) = (((right - left) * fx).ceil() as u32, ((bottom - top) * fy).ceil() as u32);
-        let pinhole = Camera { width: pw, height: ph, fx, fy, cx: -left * fx, cy: -top * fy, ..distorted.clone() };
-        Ok(Undistortion { source: (distorted.width, distorted.height), lens: k, pinhole })
+        let pinhole = Camera { width: pw, height: ph, fx, fy, cx: -left * fx, cy: -top * fy, ..self.pinhole.clone() };
+        Ok(Undistortion { source: self.source, lens: k, pinhole })
     }
 
     /// 1 where a pinhole pixel's ray lands inside the photo, 0 where the photo did not see it.
