@@ -82,22 +82,36 @@ fn capture_frames(data: &Path) -> Result<Frames> {
 }
 
 /// Whether an image of `size` read beside a `w` x `h` render is in the photo's frame of
-/// `frame`, to be undistorted into the render's.
+/// `frame` (the photo's size), to be undistorted into the render's.
 fn photo_frame(frame: Option<&Undistortion>, size: (u32, u32), w: u32, h: u32) -> Option<&Undistortion> {
-    frame.filter(|u| size != (w, h) && size == u.source && (u.pinhole.width, u.pinhole.height) == (w, h))
+    frame.filter(|u| size == u.source && (u.pinhole.width, u.pinhole.height) == (w, h))
+}
+
+/// A label image (one byte per pixel) in a `w` x `h` render's frame: as stored, or undistorted
+/// when stored in the photo's frame of `frame`.
+pub(super) fn load_labels(path: &Path, w: u32, h: u32, frame: Option<&Undistortion>) -> Result<Vec<u8>> {
+    let img = crate::io::read_image(path)?.to_luma8();
+    match photo_frame(frame, img.dimensions(), w, h) {
+        Some(u) => Ok(u.labels(img.as_raw())),
+        None if img.dimensions() == (w, h) => Ok(img.into_raw()),
+        None => bail!("{}: mask is {}x{}, the render is {w}x{h}", path.display(), img.width(), img.height()),
+    }
 }
 
 fn load_mask(path: &Path, labels: &[u8], w: u32, h: u32, frame: Option<&Undistortion>) -> Result<Vec<bool>> {
-    let img = crate::io::read_image(path)?.to_luma8();
-    let raw = match photo_frame(frame, img.dimensions(), w, h) {
-        Some(u) => u.labels(img.as_raw()),
-        None if img.dimensions() == (w, h) => img.into_raw(),
-        None => bail!("{}: mask is {}x{}, the render is {w}x{h}", path.display(), img.width(), img.height()),
-    };
+    let raw = load_labels(path, w, h, frame)?;
     Ok(raw.iter().map(|&v| if labels.is_empty() { v != 0 } else { labels.contains(&v) }).collect())
 }
 
-fn load_same_size(path: &Path, w: u32, h: u32, what: &str, frame: Option<&Undistortion>) -> Result<Vec<f32>> {
+/// An RGB image in a `w` x `h` render's frame: as stored, or undistorted when stored in the
+/// photo's frame of `frame`.
+pub(super) fn load_same_size(
+    path: &Path,
+    w: u32,
+    h: u32,
+    what: &str,
+    frame: Option<&Undistortion>,
+) -> Result<Vec<f32>> {
     let (iw, ih, img) = load_rgb(path)?;
     match photo_frame(frame, (iw, ih), w, h) {
         Some(u) => Ok(u.rgb(&img)),
@@ -184,8 +198,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Value> {
         let mask = load_mask(&mpath, &cfg.labels, w, h, frame)?;
         if cfg.fit_exposure {
             let known: Vec<bool> = mask.iter().map(|&m| !m).collect();
-            let map = crate::scene::exposure::ColorAffine::fit(&render, &gt, Some(&known));
-            render = map.apply(&render).into_iter().map(|v| v.clamp(0.0, 1.0)).collect();
+            render = crate::scene::exposure::ColorAffine::fitted_render(&render, &gt, Some(&known));
         }
         let (sm, sb, sf) = (
             mask_scores(&render, &gt, &mask, wu, hu),

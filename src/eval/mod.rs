@@ -76,7 +76,7 @@ pub fn synth_metrics(
     renders: &[Vec<f32>],
     removed_labels: &[u8],
 ) -> anyhow::Result<Option<SynthMetrics>> {
-    use crate::scene::dataset::{find_image, load_rgb};
+    use crate::scene::dataset::find_image;
     let (gt_dir, mask_dir) = (crate::synth::ground_truth(data, removed_labels).images, data.join("object_mask"));
     if !gt_dir.is_dir() || !mask_dir.is_dir() {
         return Ok(None);
@@ -86,29 +86,16 @@ pub fn synth_metrics(
         let (w, h) = (cam.width as usize, cam.height as usize);
         let gt_path = find_image(&gt_dir, &cam.name)
             .ok_or_else(|| anyhow::anyhow!("{}: no ground truth for {}", gt_dir.display(), cam.name))?;
-        let (gw, gh, gt) = load_rgb(&gt_path)?;
-        // the ground truth is stored in the photos' frame: undistorted like the photo was
-        let source = frame.map_or((w, h), |u| (u.source.0 as usize, u.source.1 as usize));
-        if (gw as usize, gh as usize) != source {
-            anyhow::bail!("{}: {gw}x{gh}, but the view's photo is {}x{}", gt_path.display(), source.0, source.1);
-        }
-        let gt = match frame {
-            Some(u) => u.rgb(&gt),
-            None => gt,
-        };
+        // stored in the photos' frame: undistorted like the photo was
+        let gt = folder::load_same_size(&gt_path, cam.width, cam.height, "ground truth", *frame)?;
         let mask_path = find_image(&mask_dir, &cam.name)
             .ok_or_else(|| anyhow::anyhow!("{}: no object mask for {}", mask_dir.display(), cam.name))?;
-        let labels = crate::io::read_image(&mask_path)?.to_luma8().into_raw();
-        let labels = match frame {
-            Some(u) => u.labels(&labels),
-            None => labels,
-        };
+        let labels = folder::load_labels(&mask_path, cam.width, cam.height, *frame)?;
         let mask: Vec<bool> = labels.iter().map(|l| removed_labels.contains(l)).collect();
         let Some(p) = masked_psnr(render, &gt, &mask) else { continue };
         m.masked_psnr += p;
         let known: Vec<bool> = mask.iter().map(|&x| !x).collect();
-        let fitted = crate::scene::exposure::ColorAffine::fit(render, &gt, Some(&known)).apply(render);
-        let fitted: Vec<f32> = fitted.into_iter().map(|v| v.clamp(0.0, 1.0)).collect();
+        let fitted = crate::scene::exposure::ColorAffine::fitted_render(render, &gt, Some(&known));
         m.masked_psnr_exposure_fitted += masked_psnr(&fitted, &gt, &mask).unwrap_or(p);
         m.masked_ssim += masked_ssim(render, &gt, &mask, w, h).unwrap_or(0.0);
         m.full_psnr += masked_psnr(render, &gt, &vec![true; w * h]).unwrap();

@@ -140,6 +140,13 @@ impl ColorAffine {
         }
     }
 
+    /// `render` through the map `fit` finds from it to `photo` on the `known` pixels, clamped to
+    /// [0, 1]: the render as the photo's exposure shows it (the held-out scores "exposure fitted").
+    pub fn fitted_render(render: &[f32], photo: &[f32], known: Option<&[bool]>) -> Vec<f32> {
+        let map = ColorAffine::fit(render, photo, known);
+        map.apply(render).into_iter().map(|v| v.clamp(0.0, 1.0)).collect()
+    }
+
     /// The least-squares map from `render` to `photo` (planar RGB) over the pixels where `known`
     /// (all when None), in f64: per channel, the normal equations of [x 1] w = y. Identity when
     /// fewer than 16 pixels count or the colors span too little to pin the map down.

@@ -535,7 +535,7 @@ impl Trainer {
             let out = self.raster.render(&self.scene, &v.camera, &settings)?;
             let (w, h) = (out.width as usize, out.height as usize);
             let clamped: Vec<f32> = out.rgb.iter().map(|&c| c.clamp(0.0, 1.0)).collect();
-            let fitted = ColorAffine::fit(&clamped, &v.image, None).apply(&clamped);
+            let fitted = ColorAffine::fitted_render(&clamped, &v.image, None);
             for (rgb, psnr, ssim) in [
                 (&clamped, &mut metrics.psnr, &mut metrics.ssim),
                 (&fitted, &mut metrics.psnr_exposure_fitted, &mut metrics.ssim_exposure_fitted),
