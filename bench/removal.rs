@@ -1,16 +1,24 @@
 //! The removal results table: a fixed set of `cogeo synth` scenes (one object, and several objects
 //! removed at once), each trained and tagged once, then removed with the full pipeline and with
 //! each ablation / baseline. Scored on the held-out views against the exact object-free ground
-//! truth with `cogeo eval`.
+//! truth with `cogeo eval`. Beside them, real-photo scenes (removal_real.rs): objects composited
+//! into the shared captures, whose original photos are the ground truth.
 //!
 //!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
 //!                                  --width 160 --height 120 --views 16 --supersample 1 --repeat-full
 //!                                  --retrain 2 --lpips-model lpips.onnx --fid-model inception.onnx
-//!                                  --exposure-jitter 0.2 --no-results]
+//!                                  --exposure-jitter 0.2 --variants "cogeo (full),removal only"
+//!                                  --real-downscale 1 --real-iters 800 --no-results]
 //!
-//! Writes bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
-//! removal only, cogeo, ground truth on one held-out view), and replaces the table between the
-//! `removal-table` markers of bench/RESULTS.md (unless --no-results). `--supersample N` makes the scenes with
+//! `--scenes` names scenes, or the groups `synth` (the default: the three rooms), `real`
+//! (statue-one, statue-two-of-three, cup-one, cup-two-of-three; hours on 2 CPU cores at full
+//! size, `--real-downscale 2` for a quicker look) or `all`. Synth scenes write
+//! bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
+//! removal only, cogeo, ground truth on one held-out view), and replace the table between the
+//! `removal-table` markers of bench/RESULTS.md (unless --no-results); real scenes write
+//! removal-real-<device>.json, removal-real-contact-sheet.png and the `removal-real-table`
+//! markers. `--variants` keeps the variants whose names start with one of the given prefixes.
+//! `--supersample N` makes the scenes with
 //! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
 //! pipeline a second time on the same trained scene, which shows the run-to-run spread (float
 //! atomics in the GPU passes) that any difference between variants must exceed. `--retrain N`
@@ -22,6 +30,8 @@
 
 #[path = "common.rs"]
 mod common;
+#[path = "removal_real.rs"]
+mod removal_real;
 
 use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use common::{cogeo, read_json, s};
@@ -42,8 +52,12 @@ const SCENES: [SceneSpec; 3] = [
     SceneSpec { name: "three-of-four", objects: 4, labels: "1,2,3", seed: 7 },
 ];
 
+/// The diagnostic variant fed the ground truth itself as its per-view inpainting (`--inpainted`):
+/// perfect 2D inpainting, the ceiling of the 3D half of the pipeline.
+const PERFECT_INPAINTING: &str = "perfect inpainting (ground truth as --inpainted)";
+
 /// (name, tagging method, extra `cogeo remove` flags)
-const VARIANTS: [(&str, &str, &[&str]); 8] = [
+const VARIANTS: [(&str, &str, &[&str]); 9] = [
     ("cogeo (full)", "vote", &[]),
     ("removal only", "vote", &["--removal-only"]),
     ("harmonic fill (no texture synthesis)", "vote", &["--inpainter", "harmonic"]),
@@ -52,6 +66,7 @@ const VARIANTS: [(&str, &str, &[&str]); 8] = [
     ("2D-projection selection", "project", &[]),
     ("no refinement", "vote", &["--no-refine"]),
     ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),
+    (PERFECT_INPAINTING, "vote", &[]),
 ];
 
 /// The variants run again on every extra training of `--retrain`: the full pipeline and the
@@ -68,7 +83,9 @@ fn num(v: &Value, digits: usize) -> String {
 
 /// One scene's dataset and how to train, tag, remove and score on it.
 struct Training<'a> {
-    spec: &'a SceneSpec,
+    /// The scene's name and the labels it removes.
+    name: &'a str,
+    labels: &'a str,
     data: &'a Path,
     truth: &'a Path,
     iters: &'a str,
@@ -85,7 +102,7 @@ impl Training<'_> {
     /// variant, with the device and the training's seed and test PSNR.
     fn variants(&self, dir: &Path, seed: u64, variants: &[(&str, &str, &[&str])]) -> Vec<Value> {
         let p = |x: &Path| x.to_string_lossy().into_owned();
-        let (spec, data) = (self.spec, self.data);
+        let data = self.data;
         let layout = Layout { out: dir };
         let capture = Capture::at(data);
         let mut train_args = pipeline::train(&capture, &layout.train());
@@ -112,15 +129,18 @@ impl Training<'_> {
         for (k, (variant, method, extra)) in variants.iter().enumerate() {
             let out = dir.join(format!("variant_{k}"));
             let tagged = dir.join(format!("tagged_{method}.ply"));
-            let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(spec.labels), &out);
+            let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(self.labels), &out);
             a.extend(s(extra));
+            if *variant == PERFECT_INPAINTING {
+                a.extend(s(&["--inpainted", &p(self.truth)]));
+            }
             if self.exposure {
                 a.extend(s(&["--exposure", &p(&layout.exposure())]));
             }
             cogeo(&a);
             let metrics_path = out.join("metrics.json");
             let mut e = pipeline::eval(&out, self.truth, &data.join("object_mask"), &metrics_path);
-            e.extend(s(&["--labels", spec.labels, "--data", &p(data), "--scene", &p(&out.join("scene.ply"))]));
+            e.extend(s(&["--labels", self.labels, "--data", &p(data), "--scene", &p(&out.join("scene.ply"))]));
             if let Some(m) = self.lpips {
                 e.extend(s(&["--lpips-model", m]));
             }
@@ -134,7 +154,7 @@ impl Training<'_> {
             let report = read_json(&out.join("report.json"));
             let m = read_json(&metrics_path);
             rows.push(json!({
-                "scene": spec.name, "removed_labels": spec.labels, "variant": variant, "training_seed": seed,
+                "scene": self.name, "removed_labels": self.labels, "variant": variant, "training_seed": seed,
                 "exposure": self.exposure, "train_test_psnr_exposure_fitted": train_metrics["test"]["psnr_exposure_fitted"],
                 "device": report["device"], "train_test_psnr": train_metrics["test"]["psnr"],
                 "metrics": m, "stage_seconds": report["seconds"], "total_seconds": report["total_seconds"],
@@ -164,6 +184,11 @@ fn main() {
     if jittered {
         variants = vec![VARIANTS[0]];
     }
+    // --variants "cogeo (full),removal only,...": only those (each a prefix of a variant's name)
+    if let Some(only) = common::arg(&args, "--variants") {
+        let prefixes: Vec<&str> = only.split(',').collect();
+        variants.retain(|v| prefixes.iter().any(|p| v.0.starts_with(p)));
+    }
     if repeat_full {
         variants.insert(1, ("cogeo (full, second run)", "vote", &[]));
     }
@@ -182,7 +207,18 @@ fn main() {
     let mut retrained = Vec::new();
     let mut device = String::new();
     let mut example: Option<(PathBuf, PathBuf, PathBuf, PathBuf, &str)> = None;
-    for spec in SCENES.iter().filter(|s| wanted.iter().any(|w| w == s.name)) {
+    let named = |name: &str, group: &str| wanted.iter().any(|w| w == name || w == group || w == "all");
+    let real: Vec<&removal_real::RealSpec> =
+        removal_real::REAL_SCENES.iter().filter(|s| named(s.name, "real")).collect();
+    if !real.is_empty() {
+        removal_real::run(&args, &real, &variants, &lpips, &fid, &root);
+    }
+    let synth: Vec<&SceneSpec> = SCENES.iter().filter(|s| named(s.name, "synth")).collect();
+    if synth.is_empty() {
+        std::fs::remove_dir_all(&root).ok();
+        return;
+    }
+    for spec in synth.iter().copied() {
         eprintln!("scene {} ({} object(s), removing {})", spec.name, spec.objects, spec.labels);
         let dir = root.join(spec.name);
         let data = dir.join("data");
@@ -211,7 +247,8 @@ fn main() {
         let truth = cogeo::synth::ground_truth(&data, &labels);
         assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);
         let mut run = Training {
-            spec,
+            name: spec.name,
+            labels: spec.labels,
             data: &data,
             truth: &truth.images,
             iters: &iters,
@@ -334,7 +371,7 @@ fn main() {
              | scene | variant | masked PSNR | masked LPIPS | seen-elsewhere gap dB | never-seen PSNR | never-seen LPIPS |\n|---|---|---|---|---|---|---|\n",
             retrain + 1
         );
-        for spec in SCENES.iter().filter(|s| wanted.iter().any(|w| w == s.name)) {
+        for spec in synth.iter() {
             for variant in RETRAIN_VARIANTS {
                 let sel: Vec<&Value> = rows
                     .iter()
@@ -366,14 +403,8 @@ fn main() {
         }
     }
     println!("{md}");
-    let slug: String = device
-        .to_lowercase()
-        .split(|c: char| !c.is_ascii_alphanumeric())
-        .filter(|w| !w.is_empty())
-        .take(3)
-        .collect::<Vec<_>>()
-        .join("-")
-        + &if supersample == "1" { String::new() } else { format!("-aa{supersample}") };
+    let slug: String =
+        device_slug(&device) + &if supersample == "1" { String::new() } else { format!("-aa{supersample}") };
     common::write_json(
         &common::results_path(&format!("removal-{slug}.json")),
         &json!({ "device": device, "supersample": supersample, "rows": rows, "retrained": retrained }),
@@ -411,6 +442,17 @@ fn main() {
     }
     common::update_results(&args, "removal-table", &format!("{md}{image_line}"));
     std::fs::remove_dir_all(&root).ok();
+}
+
+/// The first three words of the device's name, e.g. "llvmpipe-llvm-15".
+fn device_slug(device: &str) -> String {
+    device
+        .to_lowercase()
+        .split(|c: char| !c.is_ascii_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .take(3)
+        .collect::<Vec<_>>()
+        .join("-")
 }
 
 /// The `--exposure-jitter` table: each scene's full pipeline trained without and with

@@ -1,6 +1,6 @@
 //! `cogeo synth`: a procedural dataset with exact removal ground truth.
 
-use super::args::progress;
+use super::args::{open_gpu, progress, DeviceArgs};
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -53,6 +53,40 @@ pub struct SynthArgs {
     /// white balance change between shots; synth.json lists the gains. Default: 0 (none).
     #[arg(long, default_value_t = 0.0, value_name = "X", value_parser = parse_jitter)]
     pub exposure_jitter: f64,
+    /// A removal benchmark on real photos instead of a generated room: composite --objects
+    /// virtual objects (boxes and cylinders) into the photos of this capture (COLMAP model or
+    /// transforms.json), standing on its supporting surface as --scene's depth shows it, each
+    /// drawn only where it is nearer than that scene. The original photos are the ground truth;
+    /// the folder has the synth layout (one PINHOLE camera per image, in the undistorted frame).
+    /// Objects after the first stand near it, so that in some views one is partly behind another.
+    #[arg(long, value_name = "CAPTURE", requires = "scene",
+          conflicts_with_all = ["width", "height", "views", "rig", "distortion", "exposure_jitter", "points_per_view"])]
+    pub composite_into: Option<PathBuf>,
+    /// With --composite-into: the capture's scene trained without the objects (cogeo train's
+    /// scene.ply); its rendered depth locates the surfaces and hides objects behind them.
+    #[arg(long, value_name = "PLY", requires = "composite_into")]
+    pub scene: Option<PathBuf>,
+    /// With --composite-into: the capture's image folder.
+    #[arg(long, default_value = cogeo::scene::dataset::DEFAULT_IMAGE_FOLDER, requires = "composite_into")]
+    pub images: String,
+    /// With --composite-into: box-filter every photo by N x N pixels first.
+    #[arg(long, default_value_t = 1, requires = "composite_into")]
+    pub downscale: u32,
+    /// With --composite-into: the objects' half size as a fraction of the median distance from
+    /// the cameras to what they look at (each object varies by -20..+12 %).
+    #[arg(long, default_value_t = 0.06, requires = "composite_into")]
+    pub object_size: f64,
+    /// With --composite-into: darken the ground around each object's footprint by up to this
+    /// fraction (a soft contact shadow; outside the object masks, so removal must not leave it
+    /// either). Default 0: none.
+    #[arg(long, default_value_t = 0.0, requires = "composite_into")]
+    pub contact_shadow: f64,
+    /// With --composite-into: sparse points in the COLMAP model, sampled from the training
+    /// views' composited surfaces.
+    #[arg(long, default_value_t = 40_000, requires = "composite_into")]
+    pub sparse_points: usize,
+    #[command(flatten)]
+    pub device: DeviceArgs,
 }
 
 fn parse_jitter(s: &str) -> Result<f64, String> {
@@ -65,6 +99,9 @@ fn parse_jitter(s: &str) -> Result<f64, String> {
 }
 
 pub fn run(a: SynthArgs) -> Result<()> {
+    if let Some(capture) = &a.composite_into {
+        return composite(&a, capture);
+    }
     let distortion = match a.distortion[..] {
         [] => [0.0; 4],
         [k1, k2, p1, p2] if a.distortion.iter().all(|v| v.is_finite()) => [k1, k2, p1, p2],
@@ -87,5 +124,48 @@ pub fn run(a: SynthArgs) -> Result<()> {
     let objects = cogeo::synth::generate(&cfg, &a.out, &|done, _| bar.set_position(done as u64))?;
     bar.finish();
     eprintln!("wrote {} views with {} objects to {}", a.views, objects.len(), a.out.display());
+    Ok(())
+}
+
+fn composite(a: &SynthArgs, capture: &std::path::Path) -> Result<()> {
+    if !(0.0..1.0).contains(&a.contact_shadow) {
+        bail!("--contact-shadow must be in [0, 1), got {}", a.contact_shadow);
+    }
+    let cfg = cogeo::synth::composite::CompositeConfig {
+        capture: capture.to_path_buf(),
+        images: a.images.clone(),
+        downscale: a.downscale,
+        scene: a.scene.clone().expect("clap requires --scene"),
+        objects: a.objects,
+        seed: a.seed,
+        supersample: a.supersample,
+        gt_without: a.gt_without.clone(),
+        object_size: a.object_size,
+        contact_shadow: a.contact_shadow,
+        points: a.sparse_points,
+    };
+    let gpu = open_gpu(&a.device)?;
+    let bar = std::cell::RefCell::new(None::<(String, indicatif::ProgressBar)>);
+    let summary = cogeo::synth::composite::composite(&gpu, &cfg, &a.out, &|stage, done, total| {
+        let mut b = bar.borrow_mut();
+        if b.as_ref().is_none_or(|(s, _)| s != stage) {
+            if let Some((_, old)) = b.take() {
+                old.finish();
+            }
+            *b = Some((stage.to_string(), progress(total, stage)));
+        }
+        b.as_ref().unwrap().1.set_position(done as u64);
+    })?;
+    if let Some((_, b)) = bar.take() {
+        b.finish();
+    }
+    eprintln!(
+        "composited {} objects into {} views of {} ({} views with one object partly behind another) into {}",
+        summary.objects.len(),
+        summary.views,
+        capture.display(),
+        summary.views_with_overlap,
+        a.out.display()
+    );
     Ok(())
 }

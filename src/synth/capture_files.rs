@@ -31,15 +31,7 @@ pub(super) fn write_colmap(
         }
     };
     write_atomic(&out.join("sparse/0/cameras.txt"), |w| w.write_all(cams.as_bytes()).map_err(Into::into))?;
-    let mut images =
-        String::from("# Image list: IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME, then an empty points line\n");
-    for (i, cam) in cameras.iter().enumerate() {
-        let q = qvec_from_rotation(&cam.rotation);
-        let t = cam.translation;
-        images +=
-            &format!("{} {} {} {} {} {} {} {} 1 {}.png\n\n", i + 1, q[0], q[1], q[2], q[3], t[0], t[1], t[2], cam.name);
-    }
-    write_atomic(&out.join("sparse/0/images.txt"), |w| w.write_all(images.as_bytes()).map_err(Into::into))?;
+    write_images(cameras, |_| 1, out)?;
     // sparse points: surface points seen by training views, with SfM-like noise
     let hw = (cfg.width * cfg.height) as usize;
     let mut points = Vec::new();
@@ -53,13 +45,54 @@ pub(super) fn write_colmap(
             points.push(Point3D { xyz, rgb });
         }
     }
+    write_points(&points, out)?;
+    Ok(points)
+}
+
+/// Writes a COLMAP text model (sparse/0) with one PINHOLE camera per image, as the cameras are
+/// (each with its own size and intrinsics), and `points`.
+pub(super) fn write_pinhole_model(cameras: &[Camera], points: &[Point3D], out: &Path) -> Result<()> {
+    let mut cams = String::from("# Camera list: CAMERA_ID MODEL WIDTH HEIGHT PARAMS[]\n");
+    for (i, c) in cameras.iter().enumerate() {
+        cams += &format!("{} PINHOLE {} {} {} {} {} {}\n", i + 1, c.width, c.height, c.fx, c.fy, c.cx, c.cy);
+    }
+    write_atomic(&out.join("sparse/0/cameras.txt"), |w| w.write_all(cams.as_bytes()).map_err(Into::into))?;
+    write_images(cameras, |i| i + 1, out)?;
+    write_points(points, out)
+}
+
+/// images.txt: each camera's pose, with the camera id `camera_id(index)`.
+fn write_images(cameras: &[Camera], camera_id: impl Fn(usize) -> usize, out: &Path) -> Result<()> {
+    let mut images =
+        String::from("# Image list: IMAGE_ID QW QX QY QZ TX TY TZ CAMERA_ID NAME, then an empty points line\n");
+    for (i, cam) in cameras.iter().enumerate() {
+        let q = qvec_from_rotation(&cam.rotation);
+        let t = cam.translation;
+        let id = camera_id(i);
+        images += &format!(
+            "{} {} {} {} {} {} {} {} {id} {}.png\n\n",
+            i + 1,
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            t[0],
+            t[1],
+            t[2],
+            cam.name
+        );
+    }
+    write_atomic(&out.join("sparse/0/images.txt"), |w| w.write_all(images.as_bytes()).map_err(Into::into))
+}
+
+/// points3D.txt without tracks.
+fn write_points(points: &[Point3D], out: &Path) -> Result<()> {
     let mut text = String::from("# 3D point list: POINT3D_ID X Y Z R G B ERROR TRACK[]\n");
     for (id, p) in points.iter().enumerate() {
         let ([x, y, z], [r, g, b]) = (p.xyz, p.rgb);
         text += &format!("{} {x} {y} {z} {r} {g} {b} 0.5\n", id + 1);
     }
-    write_atomic(&out.join("sparse/0/points3D.txt"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
-    Ok(points)
+    write_atomic(&out.join("sparse/0/points3D.txt"), |w| w.write_all(text.as_bytes()).map_err(Into::into))
 }
 
 /// The transform `ns-process-data` applies to a COLMAP world (x and y swapped, z flipped); the

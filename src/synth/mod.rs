@@ -17,6 +17,7 @@ use std::io::Write;
 use std::path::Path;
 
 mod capture_files;
+pub mod composite;
 mod raycast;
 
 pub use raycast::{render_view, render_view_through, Object, Shape, ViewRender};
@@ -74,6 +75,9 @@ impl SynthConfig {
         }
     }
 }
+
+/// Relative depth agreement for a training view to have seen a surface point (exact depths).
+const SEEN_TOLERANCE: f64 = 0.02;
 
 /// Where a synth dataset keeps the ground truth of removing `labels`: the scene ray-cast without
 /// exactly those objects (`images`), its depth, and the never-seen mask of its surface.
@@ -266,6 +270,11 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         progress(i + 1, 2 * cameras.len());
     }
     let train: Vec<usize> = (0..cameras.len()).filter(|&i| !is_test_view(i)).collect();
+    let depths: Vec<&[f32]> = with_objects.iter().map(|v| &v.depth[..]).collect();
+    let seen_by = |points: &[V3]| {
+        let points: Vec<Option<V3>> = points.iter().copied().map(Some).collect();
+        never_seen(&points, &cameras, lens, &train, &depths, SEEN_TOLERANCE)
+    };
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cfg.width, cfg.height);
         let name = &cam.name;
@@ -277,13 +286,13 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         write_exr(&out.join(format!("depth/{name}.exr")), w, h, &[("Y", &v.depth)])?;
         write_exr(&out.join(format!("depth_background/{name}.exr")), w, h, &[("Y", &b.depth)])?;
         // background never seen: its surface point is visible (not behind an object) in no training view
-        let unseen = never_seen(&b.points, &cameras, lens, &train, &with_objects);
+        let unseen = seen_by(&b.points);
         write_png(&out.join(format!("unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
         if let Some(d) = &subset_dir {
             let s = &without_subset[i];
             write_png_rgb(&out.join(format!("{d}/images/{name}.png")), w, h, &s.rgb)?;
             write_exr(&out.join(format!("{d}/depth/{name}.exr")), w, h, &[("Y", &s.depth)])?;
-            let unseen = never_seen(&s.points, &cameras, lens, &train, &with_objects);
+            let unseen = seen_by(&s.points);
             write_png(&out.join(format!("{d}/unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
         }
         progress(cameras.len() + i + 1, 2 * cameras.len());
@@ -299,14 +308,24 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     Ok(objects)
 }
 
-/// 255 where the surface point of a pixel is visible in no training view of the full scene.
-fn never_seen(points: &[V3], cameras: &[Camera], lens: Lens, train: &[usize], with_objects: &[ViewRender]) -> Vec<u8> {
+/// 255 where the surface point of a pixel is visible in no training view of the full scene: no
+/// training view's depth (`depths`, the scene with its objects) is within `tolerance` (relative)
+/// of the point's own. Pixels without a point (nothing there) are 0.
+fn never_seen(
+    points: &[Option<V3>],
+    cameras: &[Camera],
+    lens: Lens,
+    train: &[usize],
+    depths: &[&[f32]],
+    tolerance: f64,
+) -> Vec<u8> {
     points
         .iter()
-        .map(|&point| {
+        .map(|point| {
+            let Some(point) = *point else { return 0 };
             let seen = train.iter().any(|&t| {
                 let Some((q, z)) = pixel_through(&cameras[t], lens, point) else { return false };
-                (with_objects[t].depth[q] as f64 - z).abs() <= 0.02 * z
+                (depths[t][q] as f64 - z).abs() <= tolerance * z
             });
             if seen {
                 0

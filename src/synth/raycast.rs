@@ -8,19 +8,22 @@ use crate::scene::Camera;
 
 pub(crate) type V3 = [f64; 3];
 
-fn add(a: V3, b: V3) -> V3 {
+pub(super) fn add(a: V3, b: V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
-fn sub(a: V3, b: V3) -> V3 {
+pub(super) fn sub(a: V3, b: V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
-fn scale(a: V3, s: f64) -> V3 {
+pub(super) fn scale(a: V3, s: f64) -> V3 {
     [a[0] * s, a[1] * s, a[2] * s]
 }
-fn dot(a: V3, b: V3) -> f64 {
+pub(super) fn dot(a: V3, b: V3) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
-fn norm(a: V3) -> V3 {
+pub(super) fn cross(a: V3, b: V3) -> V3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+pub(super) fn norm(a: V3) -> V3 {
     scale(a, 1.0 / dot(a, a).sqrt())
 }
 
@@ -101,12 +104,12 @@ fn fractal_noise(u: f64, v: f64, seed: u64) -> f64 {
 }
 
 /// What a ray hits: distance along the ray, point, normal, albedo, object label (0 = room).
-struct Hit {
-    t: f64,
-    point: V3,
+pub(super) struct Hit {
+    pub t: f64,
+    pub point: V3,
     normal: V3,
     albedo: V3,
-    label: u8,
+    pub label: u8,
 }
 
 fn room_hit(o: V3, d: V3, seed: u64) -> Hit {
@@ -170,7 +173,7 @@ impl MinByT for (f64, u8) {
 }
 
 /// Sphere tracing against the objects, up to `t_max`.
-fn object_hit(o: V3, d: V3, objects: &[Object], t_max: f64, seed: u64) -> Option<Hit> {
+pub(super) fn object_hit(o: V3, d: V3, objects: &[Object], t_max: f64, seed: u64) -> Option<Hit> {
     if objects.is_empty() {
         return None;
     }
@@ -207,7 +210,7 @@ fn trace(o: V3, d: V3, objects: &[Object], seed: u64) -> Hit {
     object_hit(o, d, objects, room.t, seed).unwrap_or(room)
 }
 
-fn shade(h: &Hit) -> V3 {
+pub(super) fn shade(h: &Hit) -> V3 {
     let l = norm(LIGHT);
     let lambert = dot(h.normal, l).max(0.0);
     h.albedo.map(|c| (c * (0.4 + 0.6 * lambert)).clamp(0.0, 1.0))

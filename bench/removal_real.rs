@@ -1,0 +1,319 @@
+//! The real-photo scenes of the removal bench: virtual objects composited into the shared real
+//! captures (`cogeo synth --composite-into`), whose original photos are the exact ground truth.
+//! Each capture is first trained without objects (cached under target/bench-cache, since only
+//! its depth is needed); the composited capture is then trained, tagged and removed like a synth
+//! room.
+
+use crate::common::{cogeo, s};
+use std::path::{Path, PathBuf};
+
+pub struct RealSpec {
+    pub name: &'static str,
+    /// Folder under ../shared/data.
+    pub capture: &'static str,
+    pub images: &'static str,
+    pub objects: usize,
+    pub labels: &'static str,
+    pub seed: u64,
+    /// `cogeo synth --object-size`: the cup's desk beside the cup is narrower than the lawn.
+    pub object_size: &'static str,
+}
+
+/// Two placements per capture: one object, and three objects standing near each other of which
+/// two are removed at once (in some views one stands partly behind another).
+pub const REAL_SCENES: [RealSpec; 4] = [
+    RealSpec {
+        name: "statue-one",
+        capture: "statue",
+        images: "images_2",
+        objects: 1,
+        labels: "1",
+        seed: 3,
+        object_size: "0.06",
+    },
+    RealSpec {
+        name: "statue-two-of-three",
+        capture: "statue",
+        images: "images_2",
+        objects: 3,
+        labels: "1,2",
+        seed: 4,
+        object_size: "0.06",
+    },
+    RealSpec {
+        name: "cup-one",
+        capture: "cup",
+        images: "images",
+        objects: 1,
+        labels: "1",
+        seed: 3,
+        object_size: "0.045",
+    },
+    RealSpec {
+        name: "cup-two-of-three",
+        capture: "cup",
+        images: "images",
+        objects: 3,
+        labels: "1,2",
+        seed: 4,
+        object_size: "0.045",
+    },
+];
+
+/// The shared real capture `name`.
+pub fn shared_capture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
+}
+
+/// Makes the benchmark dataset of `spec` in `data`: the capture trained without objects for
+/// `iters` iterations at `downscale` (cached), then the objects composited into its photos.
+pub fn prepare(spec: &RealSpec, downscale: u32, iters: &str, data: &Path) {
+    let capture = shared_capture(spec.capture);
+    assert!(capture.is_dir(), "{}: the shared capture is missing", capture.display());
+    let p = |x: &Path| x.to_string_lossy().into_owned();
+    let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target/bench-cache")
+        .join(format!("{}-{}-d{downscale}-i{iters}", spec.capture, spec.images));
+    let scene = cache.join("scene.ply");
+    if !scene.is_file() {
+        eprintln!("training {} without objects into {} (cached for later runs)", spec.capture, cache.display());
+        let tmp = cache.with_extension("partial");
+        std::fs::remove_dir_all(&tmp).ok();
+        cogeo(&s(&[
+            "train",
+            "--data",
+            &p(&capture),
+            "--images",
+            spec.images,
+            "--downscale",
+            &downscale.to_string(),
+            "--out",
+            &p(&tmp),
+            "--iters",
+            iters,
+            "--max-gaussians",
+            "200000",
+            "--checkpoint-every",
+            "0",
+        ]));
+        std::fs::remove_dir_all(&cache).ok();
+        std::fs::rename(&tmp, &cache).expect("cannot move the trained capture into the cache");
+    }
+    cogeo(&s(&[
+        "synth",
+        "--composite-into",
+        &p(&capture),
+        "--images",
+        spec.images,
+        "--downscale",
+        &downscale.to_string(),
+        "--scene",
+        &p(&scene),
+        "--objects",
+        &spec.objects.to_string(),
+        "--seed",
+        &spec.seed.to_string(),
+        "--gt-without",
+        spec.labels,
+        "--supersample",
+        "2",
+        "--object-size",
+        spec.object_size,
+        "--out",
+        &p(data),
+    ]));
+}
+
+/// Runs every real scene in `specs` with `variants` and writes their table (`removal-real-table`
+/// in bench/RESULTS.md, results/removal-real-<device>.json) and contact sheet.
+pub fn run(
+    args: &[String],
+    specs: &[&RealSpec],
+    variants: &[(&str, &str, &[&str])],
+    lpips: &Option<String>,
+    fid: &Option<String>,
+    root: &Path,
+) {
+    let arg = |n: &str, d: &str| crate::common::arg(args, n).unwrap_or_else(|| d.to_string());
+    // --real-downscale N, or per capture: statue=2,cup=4
+    let factors = arg("--real-downscale", "1");
+    let downscale_of = |capture: &str| -> u32 {
+        let pick = factors.split(',').find_map(|f| match f.split_once('=') {
+            Some((c, n)) => (c == capture).then_some(n),
+            None => Some(f),
+        });
+        pick.unwrap_or("1").parse().expect("--real-downscale takes factors")
+    };
+    let iters = arg("--real-iters", "800");
+    let mut rows = Vec::new();
+    let mut sheet_rows = Vec::new();
+    for spec in specs {
+        eprintln!(
+            "real scene {} ({} object(s) in {}, removing {})",
+            spec.name, spec.objects, spec.capture, spec.labels
+        );
+        let dir = root.join(spec.name);
+        let data = dir.join("data");
+        prepare(spec, downscale_of(spec.capture), &iters, &data);
+        let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
+        let truth = cogeo::synth::ground_truth(&data, &labels);
+        assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);
+        let run = crate::Training {
+            name: spec.name,
+            labels: spec.labels,
+            data: &data,
+            truth: &truth.images,
+            iters: &iters,
+            lpips,
+            fid,
+            exposure: false,
+            fit_exposure: false,
+        };
+        rows.extend(run.variants(&dir, spec.seed, variants));
+        let at = |name: &str| variants.iter().position(|v| v.0 == name).map(|k| dir.join(format!("variant_{k}")));
+        let mut columns = vec![data.join("images")];
+        columns.extend(
+            [at("removal only"), at("cogeo (full)"), at(crate::PERFECT_INPAINTING)]
+                .into_iter()
+                .flatten()
+                .map(|d| d.join("test_after")),
+        );
+        columns.push(truth.images.clone());
+        sheet_rows.push((spec.name, columns, dir.join("variant_0/metrics.json")));
+    }
+    let device = rows.first().and_then(|r| r["device"].as_str()).unwrap_or("?").to_string();
+    let md = table(&rows, specs, variants, &factors, &iters, &device);
+    println!("{md}");
+    let slug = crate::device_slug(&device);
+    crate::common::write_json(
+        &crate::common::results_path(&format!("removal-real-{slug}.json")),
+        &serde_json::json!({ "device": device, "downscale": factors, "iters": iters, "rows": rows }),
+    );
+    let sheet = contact_sheet(&sheet_rows);
+    let image_line = format!(
+        "\n![real-photo benchmark: input, removal only, cogeo, perfect inpainting, ground truth](results/{sheet})\n\n\
+         One held-out view per scene; columns: input, removal only, cogeo, cogeo fed perfect inpaintings, ground \
+         truth (the original photo).\n"
+    );
+    crate::common::update_results(args, "removal-real-table", &format!("{md}{image_line}"));
+}
+
+/// The real scenes' table, with the issue's yardsticks per scene.
+fn table(
+    rows: &[serde_json::Value],
+    specs: &[&RealSpec],
+    variants: &[(&str, &str, &[&str])],
+    downscale: &str,
+    iters: &str,
+    device: &str,
+) -> String {
+    use crate::num;
+    let mut md = format!(
+        "Removal on real photos with exact ground truth: virtual objects composited into the shared captures \
+         (`cogeo synth --composite-into`; statue `images_2`, cup `images`, further downscaled by `--real-downscale {downscale}`; \
+         {iters} training iterations of the capture without and with the objects), `cargo bench --bench removal -- \
+         --scenes real`, on {device}. Held-out views against the original photos: inside the removed objects' \
+         silhouettes (mask), its parts that some training view saw (seen elsewhere) or none did (never seen), \
+         outside the silhouettes (outside), and the silhouettes' bounding box (bbox).\n\n\
+         | scene | variant | masked PSNR | masked LPIPS | seen-elsewhere PSNR | never-seen PSNR | never-seen LPIPS | outside PSNR | bbox PSNR | leftover | time s |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    );
+    for r in rows {
+        let m = &r["metrics"];
+        md += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            r["scene"].as_str().unwrap(),
+            r["variant"].as_str().unwrap(),
+            num(&m["mask"]["psnr"], 2),
+            num(&m["lpips"]["mask"], 3),
+            num(&m["seen_elsewhere"]["psnr"], 2),
+            num(&m["never_seen"]["psnr"], 2),
+            num(&m["lpips"]["never_seen"], 3),
+            num(&m["outside"]["psnr"], 2),
+            num(&m["bbox"]["psnr"], 2),
+            num(&m["leftover"], 3),
+            num(&r["total_seconds"], 1),
+        );
+    }
+    md += "\nThe acceptance yardsticks per scene (full pipeline): beats removal only, harmonic and nearest-copy on \
+           masked PSNR and LPIPS; outside minus seen-elsewhere PSNR (at most 2 dB); never-seen LPIPS over the \
+           harmonic fill's (at most 0.7); outside minus masked PSNR with perfect inpaintings (at most 1.5 dB):\n\n\
+           | scene | beats the three (PSNR / LPIPS) | seen-elsewhere gap dB | never-seen LPIPS ratio | perfect-inpainting gap dB |\n\
+           |---|---|---:|---:|---:|\n";
+    for spec in specs {
+        let get = |variant: &str| {
+            rows.iter().find(|r| r["scene"] == spec.name && r["variant"] == variant).map(|r| &r["metrics"])
+        };
+        let f = |m: Option<&serde_json::Value>, path: &[&str]| {
+            path.iter().try_fold(m?, |v, k| v.get(*k)).and_then(|v| v.as_f64())
+        };
+        let full = get("cogeo (full)");
+        let rivals = ["removal only", "harmonic fill (no texture synthesis)", "nearest-copy fill (GG-style)"];
+        let beats = |path: &[&str], higher: bool| -> String {
+            let mine = f(full, path);
+            let all =
+                rivals.iter().filter(|v| variants.iter().any(|x| x.0 == **v)).all(|v| match (mine, f(get(v), path)) {
+                    (Some(a), Some(b)) => {
+                        if higher {
+                            a > b
+                        } else {
+                            a < b
+                        }
+                    }
+                    _ => false,
+                });
+            if mine.is_none() {
+                "n/a".into()
+            } else if all {
+                "yes".into()
+            } else {
+                "no".into()
+            }
+        };
+        let gap = f(full, &["outside", "psnr"]).zip(f(full, &["seen_elsewhere", "psnr"])).map(|(a, b)| a - b);
+        let ratio = f(full, &["lpips", "never_seen"])
+            .zip(f(get("harmonic fill (no texture synthesis)"), &["lpips", "never_seen"]))
+            .map(|(a, b)| a / b);
+        let perfect = get(crate::PERFECT_INPAINTING);
+        let ceiling = f(perfect, &["outside", "psnr"]).zip(f(perfect, &["mask", "psnr"])).map(|(a, b)| a - b);
+        let show = |v: Option<f64>, d: usize| num(&serde_json::json!(v), d);
+        md += &format!(
+            "| {} | {} / {} | {} | {} | {} |\n",
+            spec.name,
+            beats(&["mask", "psnr"], true),
+            beats(&["lpips", "mask"], false),
+            show(gap, 2),
+            show(ratio, 2),
+            show(ceiling, 2)
+        );
+    }
+    md
+}
+
+/// One row per scene of its first held-out view in each of `columns` (folders of images named
+/// like the views), side by side; returns the file name under bench/results.
+fn contact_sheet(scenes: &[(&str, Vec<PathBuf>, PathBuf)]) -> String {
+    let mut strips: Vec<image::RgbImage> = Vec::new();
+    for (_, columns, metrics) in scenes {
+        let first = crate::common::read_json(metrics)["views"][0]["name"].as_str().unwrap().to_string();
+        let images: Vec<image::RgbImage> =
+            columns.iter().map(|d| image::open(d.join(format!("{first}.png"))).unwrap().to_rgb8()).collect();
+        let (w, h) = images[0].dimensions();
+        let mut strip = image::RgbImage::from_pixel(images.len() as u32 * (w + 2), h + 2, image::Rgb([255, 255, 255]));
+        for (i, im) in images.iter().enumerate() {
+            image::imageops::replace(&mut strip, im, (i as u32 * (w + 2)) as i64, 0);
+        }
+        strips.push(strip);
+    }
+    let width = strips.iter().map(|s| s.width()).max().unwrap_or(1);
+    let height = strips.iter().map(|s| s.height()).sum::<u32>().max(1);
+    let mut sheet = image::RgbImage::from_pixel(width, height, image::Rgb([255, 255, 255]));
+    let mut y = 0;
+    for s in &strips {
+        image::imageops::replace(&mut sheet, s, 0, y);
+        y += s.height() as i64;
+    }
+    let name = "removal-real-contact-sheet.png".to_string();
+    sheet.save(crate::common::results_path(&name)).unwrap();
+    name
+}

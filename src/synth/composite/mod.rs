@@ -1,0 +1,381 @@
+//! `cogeo synth --composite-into CAPTURE`: a removal benchmark on real photos with exact ground
+//! truth. Virtual objects (the synth's boxes and cylinders, with its texture and shading) stand on
+//! the capture's supporting surface, found in the trained original scene's depth (ground.rs);
+//! each is ray-cast into every photo and composited only where it is nearer than that scene's
+//! depth. The photos themselves are then the ground truth of removing every object, and the
+//! folder has the synth's layout, so `cogeo remove`, `cogeo eval --data` and the removal bench
+//! score it as they score a synth room: images/, object_mask/, gt_background/ (the photos as
+//! loaded: undistorted and downscaled), depth/ and depth_background/ (EXR, camera z; the original
+//! scene's rendered depth, 0 where it is empty), unseen_mask/ (background that no training view
+//! sees past the objects), optional without_<labels>/, a COLMAP text model (one PINHOLE camera
+//! per image) and synth.json.
+
+mod ground;
+
+use super::raycast::{object_hit, shade, Object, V3};
+use super::{never_seen, subset_dir_name};
+use crate::gpu::Gpu;
+use crate::io::{write_atomic, write_exr, write_png, write_png_rgb};
+use crate::render::{RenderSettings, SceneRenderer};
+use crate::rng::Rng;
+use crate::scene::colmap::Point3D;
+use crate::scene::dataset::{self, is_test_view};
+use crate::scene::lens::Lens;
+use crate::scene::Camera;
+use anyhow::{bail, Context, Result};
+pub use ground::Ground;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// The composite's settings (`cogeo synth --composite-into`).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CompositeConfig {
+    /// The real capture (COLMAP model or transforms.json, and its photos).
+    pub capture: PathBuf,
+    pub images: String,
+    pub downscale: u32,
+    /// The capture's scene trained without the objects: its depth says where the surfaces are.
+    pub scene: PathBuf,
+    pub objects: usize,
+    pub seed: u64,
+    /// Rays per pixel side for the objects' colors and coverage.
+    pub supersample: u32,
+    pub gt_without: Vec<u8>,
+    /// Object half extent as a fraction of the median camera distance to what the capture looks at.
+    pub object_size: f64,
+    /// Darkening of the surface right around each object's footprint (0: none).
+    pub contact_shadow: f64,
+    /// Sparse points written to the COLMAP model (sampled from the training views' composited depth).
+    pub points: usize,
+}
+
+/// One photo of the capture with the original scene's depth there.
+struct CaptureView {
+    camera: Camera,
+    photo: Vec<f32>,
+    /// Camera z of the original scene's surface; infinite where the render is empty.
+    depth: Vec<f32>,
+}
+
+/// One view with some of the objects composited in.
+struct Composited {
+    rgb: Vec<f32>,
+    /// Camera z of the nearest surface, infinite where there is none.
+    depth: Vec<f32>,
+    labels: Vec<u8>,
+    /// Pixels where one object stands in front of another.
+    overlaps: usize,
+}
+
+/// What `composite` placed.
+pub struct CompositeSummary {
+    pub objects: Vec<Object>,
+    pub ground: Ground,
+    pub views: usize,
+    /// Views in which one object stands partly behind another.
+    pub views_with_overlap: usize,
+}
+
+/// The camera-z depth of the original scene, treated as empty below this alpha.
+const COVERED_ALPHA: f32 = 0.5;
+/// Relative depth agreement for a background point to count as seen by a training view: looser
+/// than the synth's 2 % since both depths are renders of Gaussians.
+const SEEN_TOLERANCE: f64 = 0.03;
+
+/// Composites the objects into the capture and writes the benchmark folder `out` (created; must
+/// be empty or absent).
+pub fn composite(
+    gpu: &Gpu,
+    cfg: &CompositeConfig,
+    out: &Path,
+    progress: &dyn Fn(&str, usize, usize),
+) -> Result<CompositeSummary> {
+    if cfg.objects == 0 || cfg.objects > 4 {
+        bail!("--objects must be 1..4 with --composite-into, got {}", cfg.objects);
+    }
+    if cfg.gt_without.iter().any(|&l| l == 0 || l as usize > cfg.objects) {
+        bail!("--gt-without: labels must be 1..={}", cfg.objects);
+    }
+    if !(cfg.object_size > 0.0 && cfg.object_size < 0.5) {
+        bail!("--object-size must be in (0, 0.5), got {}", cfg.object_size);
+    }
+    if out.exists() && std::fs::read_dir(out)?.next().is_some() {
+        bail!("{}: output folder is not empty", out.display());
+    }
+    let data = dataset::load(&cfg.capture, &cfg.images, cfg.downscale)?;
+    let count = data.train.len() + data.test.len();
+    let (mut train, mut test) = (data.train.into_iter(), data.test.into_iter());
+    let data_points = data.points;
+    let loaded: Vec<dataset::View> =
+        (0..count).map(|i| if is_test_view(i) { test.next() } else { train.next() }.expect("split")).collect();
+    let scene = crate::scene::ply::read_ply(&cfg.scene)?;
+    let mut renderer = SceneRenderer::new(gpu, &scene, None)?;
+    let mut views = Vec::with_capacity(count);
+    for (i, v) in loaded.into_iter().enumerate() {
+        let r = renderer.render(&v.camera, &RenderSettings::default())?;
+        let depth = r
+            .expected_depth
+            .iter()
+            .zip(&r.alpha)
+            .map(|(&z, &a)| if a > COVERED_ALPHA && z > 0.0 { z } else { f32::INFINITY })
+            .collect();
+        views.push(CaptureView { camera: v.camera, photo: v.image, depth });
+        progress("depth", i + 1, count);
+    }
+    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
+    let mut rng = Rng::new(cfg.seed);
+    let sparse: Vec<V3> = data_points.iter().map(|p| p.xyz).collect();
+    let (ground, objects) = place(cfg, &views, &sparse, &mut rng)?;
+    let kept: Vec<Object> = objects.iter().filter(|o| !cfg.gt_without.contains(&o.label)).cloned().collect();
+    let subset_dir = (!cfg.gt_without.is_empty()).then(|| subset_dir_name(&cfg.gt_without));
+    let mut with_objects = Vec::with_capacity(count);
+    let mut without_subset = Vec::new();
+    for (i, v) in views.iter().enumerate() {
+        with_objects.push(composite_view(v, &ground, &objects, cfg));
+        if subset_dir.is_some() {
+            without_subset.push(composite_view(v, &ground, &kept, cfg));
+        }
+        progress("composite", i + 1, count);
+    }
+    let train_views: Vec<usize> = (0..count).filter(|&i| !is_test_view(i)).collect();
+    let composited_depths: Vec<&[f32]> = with_objects.iter().map(|c| &c.depth[..]).collect();
+    let surface_points = |cam: &Camera, depth: &[f32]| -> Vec<Option<V3>> {
+        let w = cam.width as usize;
+        depth.iter().enumerate().map(|(p, &z)| z.is_finite().then(|| cam.pixel_point(p % w, p / w, z as f64))).collect()
+    };
+    let mut folders: Vec<String> =
+        ["images", "object_mask", "gt_background", "depth", "depth_background", "unseen_mask", "sparse/0"]
+            .map(String::from)
+            .to_vec();
+    if let Some(d) = &subset_dir {
+        folders.extend(["images", "depth", "unseen_mask"].map(|f| format!("{d}/{f}")));
+    }
+    for sub in &folders {
+        std::fs::create_dir_all(out.join(sub))
+            .with_context(|| format!("{}: cannot create", out.join(sub).display()))?;
+    }
+    let finite_or_zero = |d: &[f32]| d.iter().map(|&z| if z.is_finite() { z } else { 0.0 }).collect::<Vec<f32>>();
+    for (i, (v, c)) in views.iter().zip(&with_objects).enumerate() {
+        let (w, h, name) = (v.camera.width, v.camera.height, &v.camera.name);
+        write_png_rgb(&out.join(format!("images/{name}.png")), w, h, &c.rgb)?;
+        write_png_rgb(&out.join(format!("gt_background/{name}.png")), w, h, &v.photo)?;
+        write_png(&out.join(format!("object_mask/{name}.png")), w, h, image::ColorType::L8, &c.labels)?;
+        write_exr(&out.join(format!("depth/{name}.exr")), w, h, &[("Y", &finite_or_zero(&c.depth))])?;
+        write_exr(&out.join(format!("depth_background/{name}.exr")), w, h, &[("Y", &finite_or_zero(&v.depth))])?;
+        let points = surface_points(&v.camera, &v.depth);
+        let unseen = never_seen(&points, &cameras, Lens::Pinhole, &train_views, &composited_depths, SEEN_TOLERANCE);
+        write_png(&out.join(format!("unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
+        if let Some(d) = &subset_dir {
+            let s = &without_subset[i];
+            write_png_rgb(&out.join(format!("{d}/images/{name}.png")), w, h, &s.rgb)?;
+            write_exr(&out.join(format!("{d}/depth/{name}.exr")), w, h, &[("Y", &finite_or_zero(&s.depth))])?;
+            let points = surface_points(&v.camera, &s.depth);
+            let unseen = never_seen(&points, &cameras, Lens::Pinhole, &train_views, &composited_depths, SEEN_TOLERANCE);
+            write_png(&out.join(format!("{d}/unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
+        }
+        progress("write", i + 1, count);
+    }
+    let points = sparse_points(&views, &with_objects, &train_views, cfg.points, &mut rng);
+    super::capture_files::write_pinhole_model(&cameras, &points, out)?;
+    let views_with_overlap = with_objects.iter().filter(|c| c.overlaps >= 20).count();
+    let world: Vec<serde_json::Value> = objects
+        .iter()
+        .map(|o| {
+            serde_json::json!({ "label": o.label, "center": ground.to_world(o.center), "size": o.size * ground.unit })
+        })
+        .collect();
+    let meta = serde_json::json!({
+        "composite": cfg, "ground": ground, "objects": objects, "objects_world": world,
+        "test_views": (0..count).filter(|&i| is_test_view(i)).collect::<Vec<_>>(),
+        "views_with_one_object_behind_another": views_with_overlap,
+    });
+    let text = serde_json::to_string_pretty(&meta)?;
+    write_atomic(&out.join("synth.json"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
+    Ok(CompositeSummary { objects, ground, views: count, views_with_overlap })
+}
+
+/// Finds the supporting plane and places the objects on it.
+fn place(cfg: &CompositeConfig, views: &[CaptureView], sparse: &[V3], rng: &mut Rng) -> Result<(Ground, Vec<Object>)> {
+    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
+    let depths: Vec<Vec<f32>> = views.iter().map(|v| v.depth.clone()).collect();
+    let focus = ground::focus(&cameras, &depths).with_context(|| {
+        format!("{}: the trained scene renders no surface in the views' centers", cfg.scene.display())
+    })?;
+    let distance = |p: V3, q: V3| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+    let mut distances: Vec<f64> = cameras.iter().map(|c| distance(c.center(), focus)).collect();
+    distances.sort_by(f64::total_cmp);
+    let median = distances[distances.len() / 2];
+    // the surfaces around the focus: the capture's sparse points (structure from motion is
+    // exact on textured surfaces, where a briefly trained scene's depth is noisy), or without
+    // enough of them, about 200k points of the rendered depth
+    let mut points: Vec<V3> = sparse.iter().copied().filter(|&p| distance(p, focus) < 0.9 * median).collect();
+    let from_depth = points.len() < 1000;
+    let pixels: usize = views.iter().map(|v| v.depth.len()).sum();
+    let stride = ((pixels as f64 / 200_000.0).sqrt().ceil() as usize).max(1);
+    for v in views.iter().filter(|_| from_depth) {
+        let w = v.camera.width as usize;
+        for y in (0..v.camera.height as usize).step_by(stride) {
+            for x in (0..w).step_by(stride) {
+                let z = v.depth[y * w + x];
+                if z.is_finite() {
+                    let p = v.camera.pixel_point(x, y, z as f64);
+                    if distance(p, focus) < 0.9 * median {
+                        points.push(p);
+                    }
+                }
+            }
+        }
+    }
+    let tolerance = 0.01 * median;
+    let centers: Vec<V3> = cameras.iter().map(|c| c.center()).collect();
+    let (n, offset) = ground::supporting_plane(&points, tolerance, &centers, rng).with_context(|| {
+        format!("{}: the trained scene shows too few surface points around the capture's focus", cfg.scene.display())
+    })?;
+    let unit = cfg.object_size * median / 0.4;
+    let ground = ground::ground_frame(n, offset, focus, unit);
+    let local: Vec<V3> = points.iter().map(|&p| ground.to_local(p)).collect();
+    let rules = ground::PlacementRules {
+        ground: &ground,
+        local_points: &local,
+        cameras: &cameras,
+        depths: &depths,
+        radius: 0.6 * median / unit,
+    };
+    let objects = ground::place_objects(cfg.objects, &rules, rng).map_err(|r| {
+        anyhow::anyhow!(
+            "could not place {} objects on the supporting plane (normal {:.3?}, from {} {}): candidates \
+             refused {} times as overlapping another object, {} times as not bare and flat, {} times as \
+             hidden or outside most views; try another --seed, fewer --objects or a smaller --object-size",
+            cfg.objects,
+            n,
+            points.len(),
+            if from_depth { "points of the trained scene's depth" } else { "sparse points" },
+            r.overlapping,
+            r.not_bare,
+            r.out_of_view
+        )
+    })?;
+    Ok((ground, objects))
+}
+
+/// Ray-casts `objects` into one view: each pixel's color is the mean over `supersample`^2 rays of
+/// the object's shaded color where the ray meets an object before the original scene's surface,
+/// else the photo (darkened near the footprints by the contact shadow); label and depth come
+/// from the center ray.
+fn composite_view(v: &CaptureView, ground: &Ground, objects: &[Object], cfg: &CompositeConfig) -> Composited {
+    use rayon::prelude::*;
+    let cam = &v.camera;
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let s = cfg.supersample.max(1);
+    let origin = ground.to_local(cam.center());
+    let r = cam.rotation;
+    // the ray through image position (px, py) in local coordinates, and the length of its
+    // camera-space direction (x, y, 1): camera z times that is the distance along the ray
+    let ray = |px: f64, py: f64| {
+        let dc = [(px - cam.cx) / cam.fx, (py - cam.cy) / cam.fy, 1.0];
+        let len = (dc[0] * dc[0] + dc[1] * dc[1] + 1.0).sqrt();
+        let world = [0, 1, 2].map(|a| (r[0][a] * dc[0] + r[1][a] * dc[1] + r[2][a] * dc[2]) / len);
+        (ground.direction_to_local(world), len)
+    };
+    let seed = cfg.seed;
+    let rows: Vec<(Vec<[f32; 3]>, Vec<f32>, Vec<u8>, usize)> = (0..h)
+        .into_par_iter()
+        .map(|y| {
+            let mut row = (vec![[0f32; 3]; w], vec![f32::INFINITY; w], vec![0u8; w], 0usize);
+            for x in 0..w {
+                let p = y * w + x;
+                let scene_z = v.depth[p] as f64;
+                let photo = [0, 1, 2].map(|c| v.photo[c * w * h + p] as f64);
+                let photo = match cfg.contact_shadow > 0.0 && scene_z.is_finite() {
+                    true => {
+                        let q = ground.to_local(cam.pixel_point(x, y, scene_z));
+                        photo.map(|c| c * shadow_factor(q, objects, cfg.contact_shadow))
+                    }
+                    false => photo,
+                };
+                let hit_at = |px: f64, py: f64| {
+                    let (d, len) = ray(px, py);
+                    let t_max = if scene_z.is_finite() { scene_z * len / ground.unit } else { 1e9 };
+                    object_hit(origin, d, objects, t_max, seed)
+                };
+                let mut sum = [0.0; 3];
+                for sy in 0..s {
+                    for sx in 0..s {
+                        let (px, py) =
+                            (x as f64 + (sx as f64 + 0.5) / s as f64, y as f64 + (sy as f64 + 0.5) / s as f64);
+                        let c = hit_at(px, py).map_or(photo, |hit| shade(&hit));
+                        sum = [0, 1, 2].map(|k| sum[k] + c[k]);
+                    }
+                }
+                row.0[x] = sum.map(|c| (c / (s * s) as f64) as f32);
+                if let Some(hit) = hit_at(x as f64 + 0.5, y as f64 + 0.5) {
+                    row.1[x] = cam.to_camera(ground.to_world(hit.point))[2] as f32;
+                    row.2[x] = hit.label;
+                    // another object further along the same ray: one stands behind the other here
+                    let others: Vec<Object> = objects.iter().filter(|o| o.label != hit.label).cloned().collect();
+                    let (d, len) = ray(x as f64 + 0.5, y as f64 + 0.5);
+                    let t_max = if scene_z.is_finite() { scene_z * len / ground.unit } else { 1e9 };
+                    if object_hit(origin, d, &others, t_max, seed).is_some() {
+                        row.3 += 1;
+                    }
+                } else {
+                    row.1[x] = scene_z as f32;
+                }
+            }
+            row
+        })
+        .collect();
+    let mut out =
+        Composited { rgb: vec![0.0; 3 * w * h], depth: Vec::with_capacity(w * h), labels: Vec::new(), overlaps: 0 };
+    for (y, (rgb, depth, labels, overlaps)) in rows.into_iter().enumerate() {
+        for (x, c) in rgb.iter().enumerate() {
+            for k in 0..3 {
+                out.rgb[k * w * h + y * w + x] = c[k];
+            }
+        }
+        out.depth.extend(depth);
+        out.labels.extend(labels);
+        out.overlaps += overlaps;
+    }
+    out
+}
+
+/// The contact shadow's factor at local point `q`: darkest right at an object's footprint,
+/// fading over about half the object's size outwards and upwards.
+fn shadow_factor(q: V3, objects: &[Object], strength: f64) -> f64 {
+    objects.iter().fold(1.0, |f, o| {
+        let reach = if o.shape == super::Shape::Box { o.size * std::f64::consts::SQRT_2 } else { o.size };
+        let d = (((q[0] - o.center[0]).powi(2) + (q[1] - o.center[1]).powi(2)).sqrt() - reach).max(0.0);
+        let up = q[2].max(0.0);
+        f * (1.0 - strength * (-(d / (0.6 * o.size)).powi(2) - (up / (0.3 * o.size)).powi(2)).exp())
+    })
+}
+
+/// Sparse points for the COLMAP model: `count` surface points of the training views' composited
+/// depth (the objects included, as structure from motion would find them), with their colors.
+fn sparse_points(
+    views: &[CaptureView],
+    composited: &[Composited],
+    train: &[usize],
+    count: usize,
+    rng: &mut Rng,
+) -> Vec<Point3D> {
+    let mut points = Vec::with_capacity(count);
+    let per_view = count.div_ceil(train.len().max(1));
+    for &t in train {
+        let (cam, c) = (&views[t].camera, &composited[t]);
+        let (w, hw) = (cam.width as usize, c.depth.len());
+        let mut taken = 0;
+        for _ in 0..per_view * 4 {
+            let p = rng.below(hw);
+            if taken == per_view || !c.depth[p].is_finite() {
+                continue;
+            }
+            let xyz = cam.pixel_point(p % w, p / w, c.depth[p] as f64);
+            let rgb = [0, 1, 2].map(|k| crate::io::to_u8(c.rgb[k * hw + p]));
+            points.push(Point3D { xyz, rgb });
+            taken += 1;
+        }
+    }
+    points
+}

@@ -1,0 +1,177 @@
+//! `cogeo synth --composite-into`: objects composited into a capture whose geometry is known
+//! exactly. The capture is a floor of flat Gaussians on z = 0, photographed by rendering it, with
+//! sparse points on the floor; the composite must find that plane, stand its objects on it, draw
+//! them only where they are (everything else stays the photo, which is the ground truth), and
+//! write the subset ground truth with the kept object only.
+
+mod common;
+
+use cogeo::rng::Rng;
+use cogeo::scene::{logit, GaussianScene};
+use cogeo::synth::composite::{composite, CompositeConfig};
+use cogeo::synth::{make_cameras, qvec_from_rotation, Rig, SynthConfig};
+use std::path::Path;
+
+/// A 6 x 6 floor of thin Gaussians on z = 0 with random colors.
+fn floor() -> GaussianScene {
+    let mut rng = Rng::new(11);
+    let mut s = GaussianScene { sh_degree: 0, ..Default::default() };
+    let n = 80;
+    for i in 0..n {
+        for j in 0..n {
+            let (x, y) = (-3.0 + 6.0 * (i as f64 + 0.5) / n as f64, -3.0 + 6.0 * (j as f64 + 0.5) / n as f64);
+            s.means.push([x as f32, y as f32, 0.0]);
+            s.normals.push([0.0; 3]);
+            s.log_scales.push([(0.05f32).ln(), (0.05f32).ln(), (0.002f32).ln()]);
+            s.quats.push([1.0, 0.0, 0.0, 0.0]);
+            s.opacity_logits.push(logit(0.98));
+            for _ in 0..3 {
+                s.sh.push(((rng.range(0.2, 0.8) - 0.5) / 0.282_094_79) as f32);
+            }
+        }
+    }
+    s
+}
+
+/// Writes the capture: photos rendered from the floor, a COLMAP text model with one PINHOLE
+/// camera per image, and sparse points on the floor.
+fn write_capture(gpu: &cogeo::gpu::Gpu, dir: &Path, scene: &GaussianScene) -> Vec<cogeo::scene::Camera> {
+    let cfg = SynthConfig {
+        width: 96,
+        height: 72,
+        views: 12,
+        objects: 1,
+        rig: Rig::Forward,
+        seed: 1,
+        points_per_view: 0,
+        gt_without: vec![],
+        supersample: 1,
+        distortion: [0.0; 4],
+        exposure_jitter: 0.0,
+    };
+    let cameras = make_cameras(&cfg);
+    std::fs::create_dir_all(dir.join("images")).unwrap();
+    std::fs::create_dir_all(dir.join("sparse/0")).unwrap();
+    let photos = cogeo::render::render_rgb(gpu, scene, &cameras, [0.5; 3]).unwrap();
+    let (mut cams, mut images) = (String::new(), String::new());
+    for (i, (c, photo)) in cameras.iter().zip(&photos).enumerate() {
+        cogeo::io::write_png_rgb(&dir.join(format!("images/{}.png", c.name)), c.width, c.height, photo).unwrap();
+        cams += &format!("{} PINHOLE {} {} {} {} {} {}\n", i + 1, c.width, c.height, c.fx, c.fy, c.cx, c.cy);
+        let (q, t) = (qvec_from_rotation(&c.rotation), c.translation);
+        images += &format!(
+            "{} {} {} {} {} {} {} {} {} {}.png\n\n",
+            i + 1,
+            q[0],
+            q[1],
+            q[2],
+            q[3],
+            t[0],
+            t[1],
+            t[2],
+            i + 1,
+            c.name
+        );
+    }
+    let mut rng = Rng::new(5);
+    let points: String = (0..3000)
+        .map(|k| format!("{} {} {} 0 128 128 128 0.5\n", k + 1, rng.range(-2.8, 2.8), rng.range(-2.8, 2.8)))
+        .collect();
+    std::fs::write(dir.join("sparse/0/cameras.txt"), cams).unwrap();
+    std::fs::write(dir.join("sparse/0/images.txt"), images).unwrap();
+    std::fs::write(dir.join("sparse/0/points3D.txt"), points).unwrap();
+    cameras
+}
+
+fn rgb(path: &Path) -> (u32, u32, Vec<f32>) {
+    cogeo::scene::dataset::load_rgb(path).unwrap()
+}
+
+fn gray(path: &Path) -> Vec<u8> {
+    image::open(path).unwrap().to_luma8().into_raw()
+}
+
+#[test]
+fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
+    let gpu = common::gpu();
+    let root = common::scratch_dir("composite_floor");
+    let scene = floor();
+    let cameras = write_capture(&gpu, &root.join("capture"), &scene);
+    cogeo::scene::ply::write_ply(&scene, &root.join("floor.ply")).unwrap();
+    let cfg = CompositeConfig {
+        capture: root.join("capture"),
+        images: "images".into(),
+        downscale: 1,
+        scene: root.join("floor.ply"),
+        objects: 2,
+        seed: 3,
+        supersample: 2,
+        gt_without: vec![1],
+        object_size: 0.06,
+        contact_shadow: 0.0,
+        points: 2000,
+    };
+    let out = root.join("bench");
+    let summary = composite(&gpu, &cfg, &out, &|_, _, _| {}).unwrap();
+
+    // the plane is the floor, and each object's base lies on it
+    let g = &summary.ground;
+    assert!(g.n[2] > 0.9999, "ground normal {:?} is not the floor's +z", g.n);
+    assert!(g.origin[2].abs() < 1e-3, "ground origin {:?} is off the floor", g.origin);
+    for o in &summary.objects {
+        let half_height = if o.shape == cogeo::synth::Shape::Box { o.size } else { 1.2 * o.size };
+        let base = g.to_world([o.center[0], o.center[1], o.center[2] - half_height]);
+        assert!(base[2].abs() < 2e-3, "object {} stands at height {} instead of on the floor", o.label, base[2]);
+    }
+
+    let mut object_pixels = [0usize; 2];
+    for cam in &cameras {
+        let name = &cam.name;
+        let (w, h, composited) = rgb(&out.join(format!("images/{name}.png")));
+        let (_, _, photo) = rgb(&out.join(format!("gt_background/{name}.png")));
+        let (_, _, original) = rgb(&root.join(format!("capture/images/{name}.png")));
+        let (_, _, kept_only) = rgb(&out.join(format!("without_1/images/{name}.png")));
+        let labels = gray(&out.join(format!("object_mask/{name}.png")));
+        let (w, h) = (w as usize, h as usize);
+        // the ground truth is the photo as the capture holds it
+        assert_eq!(photo, original, "{name}: gt_background differs from the capture's photo");
+        // a pixel away from every object pixel (one-pixel ring: supersampled edges) keeps the photo
+        let near_object = |p: usize, which: &dyn Fn(u8) -> bool| {
+            let (x, y) = ((p % w) as i64, (p / w) as i64);
+            (-1..=1).any(|dy| {
+                (-1..=1).any(|dx| {
+                    let (xx, yy) = (x + dx, y + dy);
+                    xx >= 0 && yy >= 0 && xx < w as i64 && yy < h as i64 && which(labels[yy as usize * w + xx as usize])
+                })
+            })
+        };
+        for p in 0..w * h {
+            let same = |a: &[f32], b: &[f32]| (0..3).all(|c| (a[c * w * h + p] - b[c * w * h + p]).abs() < 1.5 / 255.0);
+            if !near_object(p, &|l| l != 0) {
+                assert!(same(&composited, &photo), "{name}: pixel {p} changed away from the objects");
+            }
+            // the subset ground truth shows object 2 where it is seen and the photo elsewhere
+            if !near_object(p, &|l| l != 2) {
+                assert!(same(&kept_only, &composited), "{name}: without_1 differs where object 2 is");
+            }
+            if labels[p] > 0 {
+                object_pixels[labels[p] as usize - 1] += 1;
+            }
+        }
+        // each object's world center, where it is in front of everything, carries its label
+        for o in &summary.objects {
+            let Some((x, y, _)) = cam.project_to_image(g.to_world(o.center)) else { continue };
+            let label = labels[y as usize * w + x as usize];
+            assert!(label != 0, "{name}: object {}'s center pixel has no label", o.label);
+        }
+    }
+    assert!(object_pixels.iter().all(|&n| n > 200), "objects cover too few pixels: {object_pixels:?}");
+    // the training views saw the floor under the objects from elsewhere, except right under them
+    let unseen: usize = cameras
+        .iter()
+        .map(|c| gray(&out.join(format!("unseen_mask/{}.png", c.name))).iter().filter(|&&v| v > 0).count())
+        .sum();
+    assert!(
+        unseen < object_pixels.iter().sum::<usize>(),
+        "{unseen} never-seen pixels for {object_pixels:?} object pixels"
+    );
+}
