@@ -40,7 +40,7 @@ use photo_depth::{correct_hole_depth, DepthScale};
 use rectify::Intrinsics;
 use source_views::SourceView;
 use std::path::PathBuf;
-use transfer::{transfer, Transfer};
+use transfer::{borrow_inventions, transfer, Invention, Transfer};
 
 /// How far (relative) a view's original depth may be from a point's for that view to count as
 /// having seen it when the hole's depth is corrected by photo-consistency.
@@ -111,6 +111,14 @@ pub struct CompletionConfig {
     /// factor per hole, then per pixel within 3 % of it). Runs with --no-transfer too.
     #[arg(id = "no-photo-depth", long = "no-photo-depth", action = clap::ArgAction::SetFalse)]
     pub photo_depth: bool,
+    /// Let every view invent its own colors where no photo saw the surface (ablation). By
+    /// default the views are completed one after another, the one with the most to invent
+    /// first, and each takes the colors an earlier view invented for the same surface point
+    /// (at its completed depth), inventing only what none did: one invention per surface point,
+    /// which fusion and refinement keep sharp instead of averaging several. Needs the color
+    /// transfer.
+    #[arg(id = "per-view-inventions", long = "per-view-inventions", action = clap::ArgAction::SetFalse)]
+    pub share_inventions: bool,
     /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.
     #[arg(long, default_value_t = 4.0)]
     pub soft_radius: f32,
@@ -135,6 +143,9 @@ pub struct Completer {
     /// Correct each hole's depth by photo-consistency across the views before the color
     /// transfer and the fusion (`photo_depth`; `false`: the ablation).
     pub photo_depth: bool,
+    /// Views take the colors earlier views invented for the same surface point (`transfer_colors`;
+    /// `false`: the ablation, each view invents its own).
+    pub share_inventions: bool,
     pub seed: u64,
 }
 
@@ -201,6 +212,7 @@ impl Completer {
             diffusion_steps: cfg.diffusion_steps,
             depth_guidance: cfg.depth_guidance,
             photo_depth: cfg.photo_depth,
+            share_inventions: cfg.share_inventions,
             seed,
         })
     }
@@ -251,9 +263,10 @@ impl Completer {
 
     /// Stage 3c, depth-guided color transfer over the whole `hole` of every view (covered pixels
     /// render background that few views constrained): pixels whose completed surface point another
-    /// view saw take that view's captured color (`sources`, one per view), and what no view saw
-    /// of `fill` is inpainted again, now from the transferred colors too. Returns, per view, the
-    /// transferred pixels.
+    /// view saw take that view's captured color (`sources`, one per view); with
+    /// `share_inventions`, fill pixels whose surface point an earlier view invented take that
+    /// invention (`transfer::borrow_inventions`); what is left of `fill` is inpainted again, now
+    /// from those colors too. Returns, per view, the pixels transferred from photos.
     pub fn transfer_colors(
         &mut self,
         cameras: &[Camera],
@@ -265,28 +278,50 @@ impl Completer {
         let found: Vec<Transfer> = (0..completed.len())
             .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE))
             .collect();
-        let mut transferred = Vec::with_capacity(found.len());
-        for (i, t) in found.into_iter().enumerate() {
+        // the view with the most left to invent goes first: it invents once for the views after it
+        let left = |i: usize| (0..fills[i].len()).filter(|&p| fills[i][p] && !found[i].found[p]).count();
+        let mut order: Vec<usize> = (0..completed.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
+        let mut inventions: Vec<Invention> = Vec::new();
+        let mut transferred = vec![Vec::new(); completed.len()];
+        for i in order {
             let (w, h) = (cameras[i].width as usize, cameras[i].height as usize);
+            let t = &found[i];
             let c = &mut completed[i];
-            let n = t.found.iter().filter(|&&f| f).count();
-            if n > 0 {
-                let mut image = c.rgb.clone();
-                for p in (0..w * h).filter(|&p| t.found[p]) {
+            let mut known = t.found.clone();
+            let mut image = c.rgb.clone();
+            let invented: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !t.found[p]).collect();
+            let shared = match self.share_inventions {
+                true => Some(borrow_inventions(&cameras[i], &c.depth, &invented, &inventions, TRANSFER_TOLERANCE)),
+                false => None,
+            };
+            for u in [Some(t), shared.as_ref()].into_iter().flatten() {
+                for p in (0..w * h).filter(|&p| u.found[p]) {
+                    known[p] = true;
                     for ch in 0..3 {
-                        image[ch * w * h + p] = t.rgb[ch * w * h + p];
+                        image[ch * w * h + p] = u.rgb[ch * w * h + p];
                     }
                 }
-                let rest: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !t.found[p]).collect();
-                // captured colors are sources now; the rest of the hole's render still is not
-                let found_or_fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || t.found[p]).collect();
+            }
+            if known.iter().any(|&k| k) {
+                let rest: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !known[p]).collect();
+                // captured and shared colors are sources now; the rest of the hole's render still is not
+                let found_or_fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || known[p]).collect();
                 let avoid = leftover(holes[i], &found_or_fill);
                 let k = Intrinsics::from(&cameras[i]);
                 let disparity = depth::disparity(&c.depth);
                 let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
                 c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
             }
-            transferred.push(t.found);
+            if self.share_inventions {
+                inventions.push(Invention {
+                    camera: &cameras[i],
+                    rgb: c.rgb.clone(),
+                    depth: c.depth.clone(),
+                    invented,
+                });
+            }
+            transferred[i] = t.found.clone();
         }
         Ok(transferred)
     }
@@ -364,8 +399,11 @@ impl Completer {
             )?,
             None => {
                 // covered pixels keep the depth of the Gaussians that cover them (seen from other
-                // views); only the interpolated part follows the image's edges
-                let free: Vec<bool> = (0..w * h).map(|i| fill[i] && !covered[i]).collect();
+                // views), and pixels on a continued plane keep the plane's (the diffusion's
+                // edge weights pulled a bench top's depth 3-10 % off its plane next to the hedge
+                // behind it: tests/surface_continuation.rs); only the interpolated part follows
+                // the image's edges
+                let free: Vec<bool> = (0..w * h).map(|i| fill[i] && !covered[i] && labels[i] == 0).collect();
                 depth::refine_edge_aware(&anchored.depth, &rgb, &free, w, h, self.refine_sweeps)
             }
         };

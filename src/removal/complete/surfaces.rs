@@ -4,7 +4,10 @@
 //! the hole, with no intrinsics needed. They serve twice:
 //! - the built-in depth prior continues each plane into the hole, and where planes meet it keeps
 //!   the one the band shows in front (a floor meets a wall at a crease that a smooth interpolant
-//!   would round off);
+//!   would round off). Which one that is, the band says per pair of planes: the nearer for a
+//!   bench top before the hedge behind it, the farther for the bench's top and front face at
+//!   their convex edge; where it does not say, the nearer, so that a background layer never
+//!   covers a nearer surface running into the hole (tests/surface_continuation.rs);
 //! - depth-guided color: each pixel to synthesize is filled from the known pixels of its own
 //!   surface only (`fill_by_surface`), so floor texture does not bleed into the wall.
 
@@ -23,9 +26,15 @@ const MIN_REFIT_PIXELS: usize = 12;
 #[derive(Clone, Debug)]
 pub struct Surfaces {
     pub planes: Vec<Plane>,
-    /// Where planes overlap, the nearest (largest disparity) is seen, as inside a room; otherwise
-    /// the farthest, as around a convex corner. Chosen by what the band shows.
-    pub nearest_first: bool,
+    /// Per pair of planes, which one the band shows where both could be: 1, the nearer (a bench
+    /// top in front of the hedge behind it); -1, the farther (the bench's top and its front face
+    /// meeting at a convex edge); 0, the band does not say: then the nearer, since a farther
+    /// layer must never cover a nearer surface that runs into the hole. Row-major, planes x
+    /// planes; empty: the nearer everywhere.
+    order: Vec<i8>,
+    /// The planes that may continue into the hole (bit set): after `refit_near`, those with
+    /// pixels of their own around that part of the hole.
+    present: u32,
     /// Plausible disparities (from the band): a plane continued beyond them is not used.
     lo: f64,
     hi: f64,
@@ -41,6 +50,7 @@ impl Surfaces {
     pub fn visible_among(&self, i: usize, w: usize, candidates: u32) -> Option<(usize, f64)> {
         let (x, y) = center(i, w);
         let mut best: Option<(usize, f64)> = None;
+        let candidates = candidates & self.present;
         for (s, p) in self.planes.iter().enumerate().filter(|(s, _)| candidates & (1 << s) != 0) {
             let d = p.disparity(x, y);
             if !(d >= self.lo && d <= self.hi) {
@@ -48,13 +58,73 @@ impl Surfaces {
             }
             let better = match best {
                 None => true,
-                Some((_, bd)) => (d > bd) == self.nearest_first,
+                Some((b, bd)) => (d > bd) == self.nearer_shown(s, b),
             };
             if better {
                 best = Some((s, d));
             }
         }
         best
+    }
+
+    /// Whether, where planes `s` and `t` overlap, the nearer of them is shown.
+    pub fn nearer_shown(&self, s: usize, t: usize) -> bool {
+        self.order.get(s * self.planes.len() + t) != Some(&-1)
+    }
+
+    /// The pairwise `order` the band's `members` (pixel, plane it lies on) show: for each pixel
+    /// and each other plane plausible there and with pixels of its own nearby (`support`), whether
+    /// the pixel's own plane is the nearer one. A pair takes the order at least 80 % of its votes
+    /// agree on.
+    fn pair_orders(&self, members: &[(usize, usize)], support: &[u32], disp: &[f32], w: usize) -> Vec<i8> {
+        let n = self.planes.len();
+        let mut nearer = vec![[0usize; 2]; n * n];
+        for &(i, m) in members {
+            let (x, y) = center(i, w);
+            let own = disp[i] as f64;
+            for (k, p) in self.planes.iter().enumerate().filter(|&(k, _)| k != m && support[i] & (1 << k) != 0) {
+                let d = p.disparity(x, y);
+                if d >= self.lo && d <= self.hi {
+                    let vote = (own > d) as usize;
+                    nearer[m * n + k][vote] += 1;
+                    nearer[k * n + m][vote] += 1;
+                }
+            }
+        }
+        nearer
+            .iter()
+            .map(|&[far, near]| {
+                let all = (far + near).max(1) as f64;
+                if near as f64 >= 0.8 * all && near >= 4 {
+                    1
+                } else if far as f64 >= 0.8 * all && far >= 4 {
+                    -1
+                } else {
+                    0
+                }
+            })
+            .collect()
+    }
+
+    /// A plane whose own pixels (`members`) lie, at their median, within twice PLANE_TOLERANCE of
+    /// a plane with at least as many pixels.
+    fn redundant(&self, members: &[(usize, usize)], disp: &[f32], w: usize) -> Option<usize> {
+        let count = |k: usize| members.iter().filter(|m| m.1 == k).count();
+        let n = self.planes.len();
+        (0..n).find(|&k| {
+            (0..n).filter(|&j| j != k && count(j) >= count(k)).any(|j| {
+                let mut r: Vec<f64> = members
+                    .iter()
+                    .filter(|m| m.1 == k)
+                    .map(|&(i, _)| self.planes[j].residual(i, w, disp[i] as f64))
+                    .collect();
+                if r.is_empty() {
+                    return true;
+                }
+                r.sort_by(f64::total_cmp);
+                r[r.len() / 2] < 2.0 * PLANE_TOLERANCE
+            })
+        })
     }
 
     /// The plane pixel `i` with disparity `d` lies on (the best fitting within tolerance).
@@ -89,8 +159,9 @@ impl Surfaces {
 
     /// These surfaces, each plane refitted to its own pixels in the band around `region` (one
     /// part of a hole): those within LABEL_TOLERANCE of it that fit it best, then three Tukey
-    /// reweightings (scale PLANE_TOLERANCE). A plane keeps its fit where fewer than
-    /// MIN_REFIT_PIXELS of its pixels are in that band.
+    /// reweightings (scale PLANE_TOLERANCE). A plane with fewer than MIN_REFIT_PIXELS of its
+    /// pixels in that band does not continue into this part (one piece of a curved wall fitted
+    /// around another hole would cover this one's own).
     pub fn refit_near(&self, disp: &[f32], known: &[bool], region: &[bool], w: usize, h: usize) -> Surfaces {
         let in_band = band_around(disp, known, region, w, h);
         let band: Vec<usize> = (0..w * h).filter(|&i| in_band[i]).collect();
@@ -102,6 +173,7 @@ impl Surfaces {
                 .filter(|&i| self.member_within(i, w, disp[i] as f64, LABEL_TOLERANCE) == Some(s))
                 .collect();
             if own.len() < MIN_REFIT_PIXELS {
+                out.present &= !(1 << s);
                 continue;
             }
             let mut fit = *plane;
@@ -189,18 +261,26 @@ pub fn flanking_at(labels: &[u8], unknown: &[bool], pixels: &[usize], w: usize, 
 /// The band around `hole` whose surfaces continue into it: the known pixels with a finite
 /// positive disparity within 0.3 sqrt(hole pixels) of it (4 to 48 pixels).
 fn band_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h: usize) -> Vec<bool> {
-    let holes = hole.iter().filter(|&&m| m).count();
-    let radius = (0.3 * (holes as f32).sqrt()).clamp(4.0, 48.0);
+    let radius = band_radius(hole.iter().filter(|&&m| m).count());
     let dist = distance_to(hole, w, h);
     (0..w * h).map(|i| known[i] && !hole[i] && dist[i] <= radius && disp[i] > 0.0 && disp[i].is_finite()).collect()
 }
 
+/// The width of the band around a hole of `holes` pixels.
+fn band_radius(holes: usize) -> f32 {
+    (0.3 * (holes as f32).sqrt()).clamp(4.0, 48.0)
+}
+
 /// Finds the surfaces around the `hole` from the disparity `disp` of the `known` pixels within a
-/// band around it. Planes that the chosen visibility order would show where the band says another
-/// surface is are dropped (a plane fitted to a nearby object's face must not cover the hole).
+/// band around it: up to MAX_PLANES planes of at least 5 % of the band (a bench top entering the
+/// hole from one side is that small), a plane dropped when a larger one explains its pixels
+/// nearly as well (`redundant`), then the pairwise visibility order (`pair_orders`), each plane
+/// competing only near its own pixels. Planes that this order would show where the band says
+/// another surface is are dropped (a plane fitted to a nearby object's face must not cover the
+/// hole).
 pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h: usize, seed: u64) -> Surfaces {
     let holes = hole.iter().filter(|&&m| m).count();
-    let empty = Surfaces { planes: Vec::new(), nearest_first: true, lo: 0.0, hi: 0.0 };
+    let empty = Surfaces { planes: Vec::new(), order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 0.0 };
     if holes == 0 {
         return empty;
     }
@@ -209,24 +289,40 @@ pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h:
     if in_band.len() < 12 {
         return empty;
     }
-    let min_inliers = (in_band.len() * 3 / 20).max(12);
+    let min_inliers = (in_band.len() / 20).max(12);
     let planes = fit_planes(disp, &band, w, PLANE_TOLERANCE, MAX_PLANES, min_inliers, seed);
     let (lo, hi) =
         in_band.iter().fold((f64::INFINITY, 0f64), |(lo, hi), &i| (lo.min(disp[i] as f64), hi.max(disp[i] as f64)));
-    let mut s = Surfaces { planes, nearest_first: true, lo: 0.5 * lo, hi: 2.0 * hi };
+    let mut s = Surfaces { planes, order: Vec::new(), present: u32::MAX, lo: 0.5 * lo, hi: 2.0 * hi };
+    let radius = band_radius(holes);
     loop {
         let members: Vec<(usize, usize)> =
             in_band.iter().filter_map(|&i| s.member(i, w, disp[i] as f64).map(|m| (i, m))).collect();
-        let agreement =
-            |s: &Surfaces| members.iter().filter(|&&(i, m)| s.visible(i, w).map(|v| v.0) == Some(m)).count();
-        let nearest = agreement(&Surfaces { nearest_first: true, ..s.clone() });
-        let farthest = agreement(&Surfaces { nearest_first: false, ..s.clone() });
-        s.nearest_first = nearest >= farthest;
+        // a plane that another, larger one explains nearly as well is a second piece of the same
+        // curved surface (a cylindrical wall around two holes): drop it, or the two would compete
+        // for the same pixels wherever their pieces are refitted
+        if let Some(k) = s.redundant(&members, disp, w) {
+            s.planes.remove(k);
+            continue;
+        }
+        // a plane competes for a pixel only near its own pixels: planes are finite (a bench's
+        // front face does not go on past the bench's end)
+        let mut support = vec![0u32; w * h];
+        for k in 0..s.planes.len() {
+            let mut own = vec![false; w * h];
+            members.iter().filter(|m| m.1 == k).for_each(|&(i, _)| own[i] = true);
+            for (bits, d) in support.iter_mut().zip(distance_to(&own, w, h)) {
+                if d <= radius {
+                    *bits |= 1 << k;
+                }
+            }
+        }
+        s.order = s.pair_orders(&members, &support, disp, w);
         // the share of the band pixels each plane is shown at that really lie on it
         let mut shown = vec![0usize; s.planes.len()];
         let mut right = vec![0usize; s.planes.len()];
         for &(i, m) in &members {
-            if let Some((v, _)) = s.visible(i, w) {
+            if let Some((v, _)) = s.visible_among(i, w, support[i]) {
                 shown[v] += 1;
                 right[v] += (v == m) as usize;
             }
@@ -238,6 +334,7 @@ pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h:
         match worst {
             Some((k, share)) if share < 0.5 => {
                 s.planes.remove(k);
+                s.order.clear();
             }
             _ => return s,
         }
@@ -313,7 +410,7 @@ mod tests {
         let (hole, known) = hole_across_the_crease(w, h);
         let s = surfaces_around(&disp, &known, &hole, w, h, 7);
         assert_eq!(s.planes.len(), 2, "{:?}", s.planes);
-        assert!(s.nearest_first);
+        assert!(s.nearer_shown(0, 1) && s.nearer_shown(1, 0));
         for p in &s.planes {
             let truth = if (p.b - floor.b).abs() < (p.b - wall.b).abs() { floor } else { wall };
             // the same disparity over the whole image (the data are f32)
@@ -335,7 +432,7 @@ mod tests {
             })
             .collect();
         let s = surfaces_around(&convex, &known, &hole, w, h, 7);
-        assert!(!s.nearest_first);
+        assert!(!s.nearer_shown(0, 1) && !s.nearer_shown(1, 0));
         for i in (0..w * h).filter(|&i| hole[i]) {
             let (_, d) = s.visible(i, w).unwrap();
             assert!((d - convex[i] as f64).abs() < 1e-6 * convex[i] as f64);
@@ -384,7 +481,7 @@ mod tests {
         let (w, h) = (64, 48);
         let pedestal = Plane { a: 0.0, b: 0.0, c: 0.5 };
         let bushes = Plane { a: 0.0, b: 0.0, c: 0.2 };
-        let s = Surfaces { planes: vec![pedestal, bushes], nearest_first: true, lo: 0.0, hi: 10.0 };
+        let s = Surfaces { planes: vec![pedestal, bushes], order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 10.0 };
         let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
         let depth: Vec<f32> = (0..w * h)
             .map(|i| {

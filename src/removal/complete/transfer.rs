@@ -62,3 +62,51 @@ pub fn transfer(
     }
     out
 }
+
+/// What one edited view invented (its fill pixels that no photo showed), for the views completed
+/// after it.
+pub struct Invention<'a> {
+    pub camera: &'a Camera,
+    /// The view's completed image and depth.
+    pub rgb: Vec<f32>,
+    pub depth: Vec<f32>,
+    pub invented: Vec<bool>,
+}
+
+/// One invention per surface point: the `fill` pixels of a view (camera, completed depth) whose
+/// surface point an earlier view invented (`inventions`, nearest camera first) take that view's
+/// color, so that the views agree where no photo says what is there instead of each inventing
+/// its own (which fusion and refinement would average into a blur). A point qualifies where it
+/// lands on an invented pixel at that view's completed depth within `tolerance` (relative).
+pub fn borrow_inventions(
+    camera: &Camera,
+    depth: &[f32],
+    fill: &[bool],
+    inventions: &[Invention],
+    tolerance: f64,
+) -> Transfer {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let mut out = Transfer { rgb: vec![0.0; 3 * w * h], found: vec![false; w * h] };
+    let center = camera.center();
+    let mut order: Vec<&Invention> = inventions.iter().collect();
+    let dist = |c: [f64; 3]| (0..3).map(|k| (c[k] - center[k]).powi(2)).sum::<f64>();
+    order.sort_by(|a, b| dist(a.camera.center()).total_cmp(&dist(b.camera.center())));
+    for p in (0..w * h).filter(|&p| fill[p] && depth[p] > 0.0 && depth[p].is_finite()) {
+        let world = back_project(camera, p, depth[p] as f64);
+        for inv in &order {
+            let Some((x, y, z)) = inv.camera.project_to_image(world) else { continue };
+            let (iw, ih) = (inv.camera.width as usize, inv.camera.height as usize);
+            let q = y as usize * iw + x as usize;
+            let d = inv.depth[q] as f64;
+            if !inv.invented[q] || (z - d).abs() > tolerance * d {
+                continue;
+            }
+            for c in 0..3 {
+                out.rgb[c * w * h + p] = sample_lanczos3(&inv.rgb, iw, ih, c, x, y).clamp(0.0, 1.0);
+            }
+            out.found[p] = true;
+            break;
+        }
+    }
+    out
+}
