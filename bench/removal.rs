@@ -57,7 +57,7 @@ const SCENES: [SceneSpec; 3] = [
 const PERFECT_INPAINTING: &str = "perfect inpainting (ground truth as --inpainted)";
 
 /// (name, tagging method, extra `cogeo remove` flags)
-const VARIANTS: [(&str, &str, &[&str]); 9] = [
+const VARIANTS: [(&str, &str, &[&str]); 10] = [
     ("cogeo (full)", "vote", &[]),
     ("removal only", "vote", &["--removal-only"]),
     ("harmonic fill (no texture synthesis)", "vote", &["--inpainter", "harmonic"]),
@@ -67,6 +67,7 @@ const VARIANTS: [(&str, &str, &[&str]); 9] = [
     ("no refinement", "vote", &["--no-refine"]),
     ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),
     (PERFECT_INPAINTING, "vote", &[]),
+    ("per-view inventions (no sharing)", "vote", &["--per-view-inventions"]),
 ];
 
 /// The variants run again on every extra training of `--retrain`: the full pipeline and the

@@ -145,7 +145,7 @@ pub fn run(
         pick.unwrap_or("1").parse().expect("--real-downscale takes factors")
     };
     let iters = arg("--real-iters", "800");
-    let mut rows = Vec::new();
+    let mut rows: Vec<serde_json::Value> = Vec::new();
     let mut sheet_rows = Vec::new();
     for spec in specs {
         eprintln!(
@@ -182,13 +182,29 @@ pub fn run(
         sheet_rows.push((spec.name, columns, dir.join("variant_0/metrics.json")));
     }
     let device = rows.first().and_then(|r| r["device"].as_str()).unwrap_or("?").to_string();
-    let md = table(&rows, specs, variants, &factors, &iters, &device);
-    println!("{md}");
     let slug = crate::device_slug(&device);
-    crate::common::write_json(
-        &crate::common::results_path(&format!("removal-real-{slug}.json")),
-        &serde_json::json!({ "device": device, "downscale": factors, "iters": iters, "rows": rows }),
-    );
+    let json_path = crate::common::results_path(&format!("removal-real-{slug}.json"));
+    // the scenes not run this time keep their rows from the last run on this device, so that
+    // one scene can be rerun alone (each row says how it was made)
+    for r in &mut rows {
+        r["downscale"] = serde_json::json!(factors);
+        r["iters"] = serde_json::json!(iters);
+    }
+    if let Ok(text) = std::fs::read_to_string(&json_path) {
+        let old: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+        let kept = old["rows"].as_array().cloned().unwrap_or_default().into_iter();
+        let run: Vec<&str> = specs.iter().map(|s| s.name).collect();
+        let mut merged: Vec<serde_json::Value> =
+            kept.filter(|r| r["scene"].as_str().is_some_and(|n| !run.contains(&n))).collect();
+        merged.append(&mut rows);
+        rows = merged;
+    }
+    let order = |r: &serde_json::Value| REAL_SCENES.iter().position(|s| r["scene"] == s.name).unwrap_or(usize::MAX);
+    rows.sort_by_key(order);
+    let all: Vec<&RealSpec> = REAL_SCENES.iter().filter(|s| rows.iter().any(|r| r["scene"] == s.name)).collect();
+    let md = table(&rows, &all, variants, &device);
+    println!("{md}");
+    crate::common::write_json(&json_path, &serde_json::json!({ "device": device, "rows": rows }));
     let sheet = contact_sheet(&sheet_rows);
     let image_line = format!(
         "\n![real-photo benchmark: input, removal only, cogeo, perfect inpainting, ground truth](results/{sheet})\n\n\
@@ -199,30 +215,25 @@ pub fn run(
 }
 
 /// The real scenes' table, with the issue's yardsticks per scene.
-fn table(
-    rows: &[serde_json::Value],
-    specs: &[&RealSpec],
-    variants: &[(&str, &str, &[&str])],
-    downscale: &str,
-    iters: &str,
-    device: &str,
-) -> String {
+fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &str, &[&str])], device: &str) -> String {
     use crate::num;
     let mut md = format!(
         "Removal on real photos with exact ground truth: virtual objects composited into the shared captures \
-         (`cogeo synth --composite-into`; statue `images_2`, cup `images`, further downscaled by `--real-downscale {downscale}`; \
-         {iters} training iterations of the capture without and with the objects), `cargo bench --bench removal -- \
-         --scenes real`, on {device}. Held-out views against the original photos: inside the removed objects' \
+         (`cogeo synth --composite-into`; statue `images_2`, cup `images`, further downscaled by the row's \
+         `--real-downscale`; the row's number of training iterations of the capture without and with the objects), \
+         `cargo bench --bench removal -- --scenes real`, on {device}. Held-out views against the original photos: inside the removed objects' \
          silhouettes (mask), its parts that some training view saw (seen elsewhere) or none did (never seen), \
          outside the silhouettes (outside), and the silhouettes' bounding box (bbox).\n\n\
-         | scene | variant | masked PSNR | masked LPIPS | seen-elsewhere PSNR | never-seen PSNR | never-seen LPIPS | outside PSNR | bbox PSNR | leftover | time s |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+         | scene | downscale, iterations | variant | masked PSNR | masked LPIPS | seen-elsewhere PSNR | never-seen PSNR | never-seen LPIPS | outside PSNR | bbox PSNR | leftover | time s |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     );
     for r in rows {
         let m = &r["metrics"];
         md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {}, {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r["scene"].as_str().unwrap(),
+            r["downscale"].as_str().unwrap_or("?"),
+            r["iters"].as_str().unwrap_or("?"),
             r["variant"].as_str().unwrap(),
             num(&m["mask"]["psnr"], 2),
             num(&m["lpips"]["mask"], 3),
@@ -290,11 +301,12 @@ fn table(
     md
 }
 
-/// One row per scene of its first held-out view in each of `columns` (folders of images named
-/// like the views), side by side; returns the file name under bench/results.
+/// Each scene's strip (bench/results/removal-real-<scene>.png): its first held-out view in each
+/// of `columns` (folders of images named like the views), side by side; then the sheet of every
+/// scene's latest strip; returns the sheet's file name under bench/results.
 fn contact_sheet(scenes: &[(&str, Vec<PathBuf>, PathBuf)]) -> String {
-    let mut strips: Vec<image::RgbImage> = Vec::new();
-    for (_, columns, metrics) in scenes {
+    let strip_path = |scene: &str| crate::common::results_path(&format!("removal-real-{scene}.png"));
+    for (scene, columns, metrics) in scenes {
         let first = crate::common::read_json(metrics)["views"][0]["name"].as_str().unwrap().to_string();
         let images: Vec<image::RgbImage> =
             columns.iter().map(|d| image::open(d.join(format!("{first}.png"))).unwrap().to_rgb8()).collect();
@@ -303,8 +315,11 @@ fn contact_sheet(scenes: &[(&str, Vec<PathBuf>, PathBuf)]) -> String {
         for (i, im) in images.iter().enumerate() {
             image::imageops::replace(&mut strip, im, (i as u32 * (w + 2)) as i64, 0);
         }
-        strips.push(strip);
+        strip.save(strip_path(scene)).unwrap();
     }
+    // every scene's latest strip, in the table's order
+    let strips: Vec<image::RgbImage> =
+        REAL_SCENES.iter().filter_map(|s| image::open(strip_path(s.name)).ok().map(|i| i.to_rgb8())).collect();
     let width = strips.iter().map(|s| s.width()).max().unwrap_or(1);
     let height = strips.iter().map(|s| s.height()).sum::<u32>().max(1);
     let mut sheet = image::RgbImage::from_pixel(width, height, image::Rgb([255, 255, 255]));

@@ -278,7 +278,9 @@ fn composite_view(v: &CaptureView, ground: &Ground, objects: &[Object], cfg: &Co
         (ground.direction_to_local(world), len)
     };
     let seed = cfg.seed;
-    let rows: Vec<(Vec<[f32; 3]>, Vec<f32>, Vec<u8>, usize)> = (0..h)
+    // one image row: colors, depth, labels, pixels where one object stands before another
+    type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<u8>, usize);
+    let rows: Vec<Row> = (0..h)
         .into_par_iter()
         .map(|y| {
             let mut row = (vec![[0f32; 3]; w], vec![f32::INFINITY; w], vec![0u8; w], 0usize);
