@@ -225,17 +225,7 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
         bail!("--gt-without: labels must be 1..={}", cfg.objects);
     }
     let subset_dir = (!cfg.gt_without.is_empty()).then(|| subset_dir_name(&cfg.gt_without));
-    let mut folders: Vec<String> =
-        ["images", "object_mask", "gt_background", "depth", "depth_background", "unseen_mask", "sparse/0"]
-            .map(String::from)
-            .to_vec();
-    if let Some(d) = &subset_dir {
-        folders.extend(["images", "depth", "unseen_mask"].map(|f| format!("{d}/{f}")));
-    }
-    for sub in &folders {
-        std::fs::create_dir_all(out.join(sub))
-            .with_context(|| format!("{}: cannot create", out.join(sub).display()))?;
-    }
+    create_folders(out, subset_dir.as_deref())?;
     let mut rng = Rng::new(cfg.seed);
     let objects = make_objects(cfg.objects, &mut rng);
     if objects.len() < cfg.objects {
@@ -306,6 +296,22 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     let text = serde_json::to_string_pretty(&meta)?;
     write_atomic(&out.join("synth.json"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
     Ok(objects)
+}
+
+/// The folders of a synth dataset in `out`, with those of the subset ground truth `subset_dir`.
+fn create_folders(out: &Path, subset_dir: Option<&str>) -> Result<()> {
+    let mut folders: Vec<String> =
+        ["images", "object_mask", "gt_background", "depth", "depth_background", "unseen_mask", "sparse/0"]
+            .map(String::from)
+            .to_vec();
+    if let Some(d) = subset_dir {
+        folders.extend(["images", "depth", "unseen_mask"].map(|f| format!("{d}/{f}")));
+    }
+    for sub in &folders {
+        std::fs::create_dir_all(out.join(sub))
+            .with_context(|| format!("{}: cannot create", out.join(sub).display()))?;
+    }
+    Ok(())
 }
 
 /// 255 where the surface point of a pixel is visible in no training view of the full scene: no

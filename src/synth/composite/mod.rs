@@ -143,17 +143,7 @@ pub fn composite(
         let w = cam.width as usize;
         depth.iter().enumerate().map(|(p, &z)| z.is_finite().then(|| cam.pixel_point(p % w, p / w, z as f64))).collect()
     };
-    let mut folders: Vec<String> =
-        ["images", "object_mask", "gt_background", "depth", "depth_background", "unseen_mask", "sparse/0"]
-            .map(String::from)
-            .to_vec();
-    if let Some(d) = &subset_dir {
-        folders.extend(["images", "depth", "unseen_mask"].map(|f| format!("{d}/{f}")));
-    }
-    for sub in &folders {
-        std::fs::create_dir_all(out.join(sub))
-            .with_context(|| format!("{}: cannot create", out.join(sub).display()))?;
-    }
+    super::create_folders(out, subset_dir.as_deref())?;
     let finite_or_zero = |d: &[f32]| d.iter().map(|&z| if z.is_finite() { z } else { 0.0 }).collect::<Vec<f32>>();
     for (i, (v, c)) in views.iter().zip(&with_objects).enumerate() {
         let (w, h, name) = (v.camera.width, v.camera.height, &v.camera.name);
