@@ -67,7 +67,7 @@ const VARIANTS: [(&str, &str, &[&str]); 10] = [
     ("no refinement", "vote", &["--no-refine"]),
     ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),
     (PERFECT_INPAINTING, "vote", &[]),
-    ("per-view inventions (no sharing)", "vote", &["--per-view-inventions"]),
+    ("shared inventions (one per surface point)", "vote", &["--share-inventions"]),
 ];
 
 /// The variants run again on every extra training of `--retrain`: the full pipeline and the
