@@ -17,7 +17,9 @@
 //! removal only, cogeo, ground truth on one held-out view), and replace the table between the
 //! `removal-table` markers of bench/RESULTS.md (unless --no-results); real scenes write
 //! removal-real-<device>.json, removal-real-contact-sheet.png and the `removal-real-table`
-//! markers. `--variants` keeps the variants whose names start with one of the given prefixes.
+//! markers; a rerun of some real scenes keeps the others' rows, and `--real-table-only` rebuilds
+//! the table and sheet from the stored rows without running anything. `--variants` keeps the
+//! variants whose names start with one of the given prefixes.
 //! `--supersample N` makes the scenes with
 //! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
 //! pipeline a second time on the same trained scene, which shows the run-to-run spread (float

@@ -147,7 +147,9 @@ pub fn run(
     let iters = arg("--real-iters", "800");
     let mut rows: Vec<serde_json::Value> = Vec::new();
     let mut sheet_rows = Vec::new();
-    for spec in specs {
+    // --real-table-only: no scene is run; the table and sheet are rebuilt from the stored rows
+    let table_only = args.iter().any(|a| a == "--real-table-only");
+    for spec in specs.iter().filter(|_| !table_only) {
         eprintln!(
             "real scene {} ({} object(s) in {}, removing {})",
             spec.name, spec.objects, spec.capture, spec.labels
@@ -181,9 +183,20 @@ pub fn run(
         columns.push(truth.images.clone());
         sheet_rows.push((spec.name, columns, dir.join("variant_0/metrics.json")));
     }
-    let device = rows.first().and_then(|r| r["device"].as_str()).unwrap_or("?").to_string();
-    let slug = crate::device_slug(&device);
-    let json_path = crate::common::results_path(&format!("removal-real-{slug}.json"));
+    let stored = |slug: &str| crate::common::results_path(&format!("removal-real-{slug}.json"));
+    let json_path = match rows.first().and_then(|r| r["device"].as_str()) {
+        Some(device) => stored(&crate::device_slug(device)),
+        // the one device with stored rows
+        None => std::fs::read_dir(crate::common::results_path(""))
+            .unwrap()
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .find(|p| {
+                p.file_name().is_some_and(|n| {
+                    n.to_string_lossy().starts_with("removal-real-") && p.extension().is_some_and(|x| x == "json")
+                })
+            })
+            .expect("--real-table-only: no bench/results/removal-real-<device>.json"),
+    };
     // the scenes not run this time keep their rows from the last run on this device, so that
     // one scene can be rerun alone (each row says how it was made)
     for r in &mut rows {
@@ -193,12 +206,13 @@ pub fn run(
     if let Ok(text) = std::fs::read_to_string(&json_path) {
         let old: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
         let kept = old["rows"].as_array().cloned().unwrap_or_default().into_iter();
-        let run: Vec<&str> = specs.iter().map(|s| s.name).collect();
+        let run: Vec<&str> = specs.iter().filter(|_| !table_only).map(|s| s.name).collect();
         let mut merged: Vec<serde_json::Value> =
             kept.filter(|r| r["scene"].as_str().is_some_and(|n| !run.contains(&n))).collect();
         merged.append(&mut rows);
         rows = merged;
     }
+    let device = rows.first().and_then(|r| r["device"].as_str()).unwrap_or("?").to_string();
     let order = |r: &serde_json::Value| REAL_SCENES.iter().position(|s| r["scene"] == s.name).unwrap_or(usize::MAX);
     rows.sort_by_key(order);
     let all: Vec<&RealSpec> = REAL_SCENES.iter().filter(|s| rows.iter().any(|r| r["scene"] == s.name)).collect();
