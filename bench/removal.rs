@@ -276,7 +276,8 @@ fn main() {
             retrained.extend(run.variants(&dir.join(format!("retrain_{i}")), seed, &chosen));
         }
         // variant 0 is the full pipeline
-        let only = variants.iter().position(|v| v.0 == "removal only").unwrap();
+        // the example image needs removal only beside the full pipeline (--variants may leave it out)
+        let Some(only) = variants.iter().position(|v| v.0 == "removal only") else { continue };
         if spec.name == "two-of-three" || example.is_none() {
             example = Some((
                 data.clone(),
