@@ -279,7 +279,8 @@ impl Completer {
         let found: Vec<Transfer> = (0..completed.len())
             .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE))
             .collect();
-        // the view with the most left to invent goes first: it invents once for the views after it
+        // the view with the most left to invent goes first: with shared inventions it invents once
+        // for the views after it (without them the order changes nothing)
         let left = |i: usize| (0..fills[i].len()).filter(|&p| fills[i][p] && !found[i].found[p]).count();
         let mut order: Vec<usize> = (0..completed.len()).collect();
         order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
@@ -292,10 +293,9 @@ impl Completer {
             let mut known = t.found.clone();
             let mut image = c.rgb.clone();
             let invented: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !t.found[p]).collect();
-            let shared = match self.share_inventions {
-                true => Some(borrow_inventions(&cameras[i], &c.depth, &invented, &inventions, TRANSFER_TOLERANCE)),
-                false => None,
-            };
+            let shared = self
+                .share_inventions
+                .then(|| borrow_inventions(&cameras[i], &c.depth, &invented, &inventions, TRANSFER_TOLERANCE));
             for u in [Some(t), shared.as_ref()].into_iter().flatten() {
                 for p in (0..w * h).filter(|&p| u.found[p]) {
                     known[p] = true;
