@@ -51,6 +51,24 @@ impl DeviceArgs {
 
 pub use cogeo::flag_values::parse_rgb;
 
+/// One bar for a run of named stages: `set_stage` shows each stage's name and its items done.
+pub fn stage_progress() -> ProgressBar {
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>9} [{bar:30}] {pos}/{len} {elapsed_precise}")
+            .unwrap()
+            .progress_chars("=> "),
+    );
+    bar
+}
+
+/// Shows `done` of `total` items of `stage` on a `stage_progress` bar.
+pub fn set_stage(bar: &ProgressBar, stage: &str, done: usize, total: usize) {
+    bar.set_message(stage.to_string());
+    bar.set_length(total as u64);
+    bar.set_position(done as u64);
+}
+
 pub fn progress(len: usize, what: &str) -> ProgressBar {
     let bar = ProgressBar::new(len as u64);
     bar.set_style(

@@ -9,7 +9,6 @@ use cogeo::removal::complete::Completer;
 use cogeo::removal::held_out::{render_held_out, score_against_synth, GroundTruthScores};
 use cogeo::removal::report::RemovalReport;
 use cogeo::scene::{ply, Camera};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 
 #[derive(Args, Clone)]
@@ -154,12 +153,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         gpu.info().name
     );
     let cameras: Vec<Camera> = data.train.iter().map(|v| v.camera.clone()).collect();
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{msg:>9} [{bar:30}] {pos}/{len} {elapsed_precise}")
-            .unwrap()
-            .progress_chars("=> "),
-    );
+    let bar = super::args::stage_progress();
     let start = std::time::Instant::now();
     let removal = cogeo::removal::remove(
         &gpu,
@@ -170,11 +164,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         data.extent,
         &opts,
         &mut completer,
-        &mut |stage, done, total| {
-            bar.set_message(stage.to_string());
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        },
+        &mut |stage, done, total| super::args::set_stage(&bar, stage, done, total),
     )?;
     bar.finish_and_clear();
     // outputs: edited views, then held-out views before / after

@@ -1,6 +1,6 @@
 //! `cogeo synth`: a procedural dataset with exact removal ground truth.
 
-use super::args::{open_gpu, progress, DeviceArgs};
+use super::args::{open_gpu, progress, set_stage, stage_progress, DeviceArgs};
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -145,20 +145,11 @@ fn composite(a: &SynthArgs, capture: &std::path::Path) -> Result<()> {
         points: a.sparse_points,
     };
     let gpu = open_gpu(&a.device)?;
-    let bar = std::cell::RefCell::new(None::<(String, indicatif::ProgressBar)>);
+    let bar = stage_progress();
     let summary = cogeo::synth::composite::composite(&gpu, &cfg, &a.out, &|stage, done, total| {
-        let mut b = bar.borrow_mut();
-        if b.as_ref().is_none_or(|(s, _)| s != stage) {
-            if let Some((_, old)) = b.take() {
-                old.finish();
-            }
-            *b = Some((stage.to_string(), progress(total, stage)));
-        }
-        b.as_ref().unwrap().1.set_position(done as u64);
+        set_stage(&bar, stage, done, total)
     })?;
-    if let Some((_, b)) = bar.take() {
-        b.finish();
-    }
+    bar.finish_and_clear();
     eprintln!(
         "composited {} objects into {} views of {} ({} views with one object partly behind another) into {}",
         summary.objects.len(),

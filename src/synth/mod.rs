@@ -145,12 +145,7 @@ pub fn make_objects(count: usize, rng: &mut Rng) -> Vec<Object> {
         let shape = shapes[(objects.len() + rng.next_u64() as usize % 2) % 4];
         let size = rng.range(0.3, 0.5);
         let (x, y) = (rng.range(-1.5, 1.5), rng.range(-1.0, 1.0));
-        let extent = match shape {
-            Shape::Torus => 1.35 * size,
-            Shape::Cylinder => 1.2 * size,
-            _ => size,
-        };
-        let center = [x, y, extent];
+        let center = [x, y, shape.half_height(size)];
         if objects
             .iter()
             .any(|o| ((o.center[0] - x).powi(2) + (o.center[1] - y).powi(2)).sqrt() < o.size * 1.4 + size * 1.4 + 0.1)

@@ -35,6 +35,27 @@ pub enum Shape {
     Torus,
 }
 
+impl Shape {
+    /// Half the height of an object of this shape and `size` standing upright (`Object::sdf`).
+    pub fn half_height(self, size: f64) -> f64 {
+        match self {
+            Shape::Box | Shape::Sphere => size,
+            Shape::Cylinder => 1.2 * size,
+            Shape::Torus => 1.35 * size,
+        }
+    }
+
+    /// The radius of the circle around its footprint (a box's half diagonal; the torus stands in
+    /// the x-z plane, so its ring spans 1.35 size along x).
+    pub fn footprint_radius(self, size: f64) -> f64 {
+        match self {
+            Shape::Box => size * std::f64::consts::SQRT_2,
+            Shape::Sphere | Shape::Cylinder => size,
+            Shape::Torus => 1.35 * size,
+        }
+    }
+}
+
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Object {
     /// Instance label in the masks (1-based).

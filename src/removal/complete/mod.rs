@@ -279,13 +279,14 @@ impl Completer {
         let found: Vec<Transfer> = (0..completed.len())
             .map(|i| transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE))
             .collect();
-        // the view with the most left to invent goes first: with shared inventions it invents once
-        // for the views after it (without them the order changes nothing)
-        let left = |i: usize| (0..fills[i].len()).filter(|&p| fills[i][p] && !found[i].found[p]).count();
+        // with shared inventions the view with the most left to invent goes first: it invents once
+        // for the views after it (without them the views are independent)
         let mut order: Vec<usize> = (0..completed.len()).collect();
-        order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
+        if self.share_inventions {
+            let left = |i: usize| (0..fills[i].len()).filter(|&p| fills[i][p] && !found[i].found[p]).count();
+            order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
+        }
         let mut inventions: Vec<Invention> = Vec::new();
-        let mut transferred = vec![Vec::new(); completed.len()];
         for i in order {
             let (w, h) = (cameras[i].width as usize, cameras[i].height as usize);
             let t = &found[i];
@@ -322,9 +323,8 @@ impl Completer {
                     invented,
                 });
             }
-            transferred[i] = t.found.clone();
         }
-        Ok(transferred)
+        Ok(found.into_iter().map(|t| t.found).collect())
     }
 
     pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {

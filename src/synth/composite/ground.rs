@@ -36,7 +36,7 @@ impl Ground {
 /// What the capture looks at: per view, the surface point under the image's central 20 % (its
 /// median depth there), and of those the per-axis median. Unlike the point nearest to the
 /// optical axes, this holds for forward-facing captures, whose axes are nearly parallel.
-pub fn focus(cameras: &[Camera], depths: &[Vec<f32>]) -> Option<V3> {
+pub fn focus(cameras: &[Camera], depths: &[&[f32]]) -> Option<V3> {
     let mut centers: Vec<V3> = Vec::new();
     for (cam, depth) in cameras.iter().zip(depths) {
         let (w, h) = (cam.width as usize, cam.height as usize);
@@ -154,7 +154,7 @@ pub struct PlacementRules<'a> {
     pub local_points: &'a [V3],
     pub cameras: &'a [Camera],
     /// Each camera's rendered depth of the original scene (camera z; infinite where empty).
-    pub depths: &'a [Vec<f32>],
+    pub depths: &'a [&'a [f32]],
     /// How far (local units) from the origin objects may stand.
     pub radius: f64,
 }
@@ -182,11 +182,7 @@ pub fn place_objects(count: usize, rules: &PlacementRules, rng: &mut Rng) -> Res
         }
         let k = objects.len();
         let (shape, size) = (shapes[k % 4], rng.range(0.32, 0.45));
-        // box: half extent; cylinder: radius, half height 1.2 x (raycast.rs)
-        let (footprint, half_height) = match shape {
-            Shape::Box => (size * std::f64::consts::SQRT_2, size),
-            _ => (size, 1.2 * size),
-        };
+        let (footprint, half_height) = (shape.footprint_radius(size), shape.half_height(size));
         let (x, y) = match objects.first() {
             // the first stands where some surface point lies near the plane
             None => {
@@ -208,7 +204,7 @@ pub fn place_objects(count: usize, rules: &PlacementRules, rng: &mut Rng) -> Res
             continue;
         }
         let apart = objects.iter().all(|o| {
-            let other = if o.shape == Shape::Box { o.size * std::f64::consts::SQRT_2 } else { o.size };
+            let other = o.shape.footprint_radius(o.size);
             ((o.center[0] - x).powi(2) + (o.center[1] - y).powi(2)).sqrt() > 1.25 * (footprint + other)
         });
         if !apart {

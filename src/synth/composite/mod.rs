@@ -125,7 +125,7 @@ pub fn composite(
     let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
     let mut rng = Rng::new(cfg.seed);
     let sparse: Vec<V3> = data_points.iter().map(|p| p.xyz).collect();
-    let (ground, objects) = place(cfg, &views, &sparse, &mut rng)?;
+    let (ground, objects) = place(cfg, &views, &cameras, &sparse, &mut rng)?;
     let kept: Vec<Object> = objects.iter().filter(|o| !cfg.gt_without.contains(&o.label)).cloned().collect();
     let subset_dir = (!cfg.gt_without.is_empty()).then(|| subset_dir_name(&cfg.gt_without));
     let mut with_objects = Vec::with_capacity(count);
@@ -185,10 +185,15 @@ pub fn composite(
 }
 
 /// Finds the supporting plane and places the objects on it.
-fn place(cfg: &CompositeConfig, views: &[CaptureView], sparse: &[V3], rng: &mut Rng) -> Result<(Ground, Vec<Object>)> {
-    let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
-    let depths: Vec<Vec<f32>> = views.iter().map(|v| v.depth.clone()).collect();
-    let focus = ground::focus(&cameras, &depths).with_context(|| {
+fn place(
+    cfg: &CompositeConfig,
+    views: &[CaptureView],
+    cameras: &[Camera],
+    sparse: &[V3],
+    rng: &mut Rng,
+) -> Result<(Ground, Vec<Object>)> {
+    let depths: Vec<&[f32]> = views.iter().map(|v| &v.depth[..]).collect();
+    let focus = ground::focus(cameras, &depths).with_context(|| {
         format!("{}: the trained scene renders no surface in the views' centers", cfg.scene.display())
     })?;
     let distance = |p: V3, q: V3| ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
@@ -227,7 +232,7 @@ fn place(cfg: &CompositeConfig, views: &[CaptureView], sparse: &[V3], rng: &mut 
     let rules = ground::PlacementRules {
         ground: &ground,
         local_points: &local,
-        cameras: &cameras,
+        cameras,
         depths: &depths,
         radius: 0.6 * median / unit,
     };
@@ -268,6 +273,9 @@ fn composite_view(v: &CaptureView, ground: &Ground, objects: &[Object], cfg: &Co
         (ground.direction_to_local(world), len)
     };
     let seed = cfg.seed;
+    // per object, the others: what a ray that meets it may meet further on
+    let others: Vec<Vec<Object>> =
+        objects.iter().map(|o| objects.iter().filter(|p| p.label != o.label).cloned().collect()).collect();
     // one image row: colors, depth, labels, pixels where one object stands before another
     type Row = (Vec<[f32; 3]>, Vec<f32>, Vec<u8>, usize);
     let rows: Vec<Row> = (0..h)
@@ -285,29 +293,29 @@ fn composite_view(v: &CaptureView, ground: &Ground, objects: &[Object], cfg: &Co
                     }
                     false => photo,
                 };
-                let hit_at = |px: f64, py: f64| {
+                // the first of `among` that the ray through (px, py) meets before the scene's surface
+                let hit_among = |px: f64, py: f64, among: &[Object]| {
                     let (d, len) = ray(px, py);
                     let t_max = if scene_z.is_finite() { scene_z * len / ground.unit } else { 1e9 };
-                    object_hit(origin, d, objects, t_max, seed)
+                    object_hit(origin, d, among, t_max, seed)
                 };
                 let mut sum = [0.0; 3];
                 for sy in 0..s {
                     for sx in 0..s {
                         let (px, py) =
                             (x as f64 + (sx as f64 + 0.5) / s as f64, y as f64 + (sy as f64 + 0.5) / s as f64);
-                        let c = hit_at(px, py).map_or(photo, |hit| shade(&hit));
+                        let c = hit_among(px, py, objects).map_or(photo, |hit| shade(&hit));
                         sum = [0, 1, 2].map(|k| sum[k] + c[k]);
                     }
                 }
                 row.0[x] = sum.map(|c| (c / (s * s) as f64) as f32);
-                if let Some(hit) = hit_at(x as f64 + 0.5, y as f64 + 0.5) {
+                let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
+                if let Some(hit) = hit_among(cx, cy, objects) {
                     row.1[x] = cam.to_camera(ground.to_world(hit.point))[2] as f32;
                     row.2[x] = hit.label;
                     // another object further along the same ray: one stands behind the other here
-                    let others: Vec<Object> = objects.iter().filter(|o| o.label != hit.label).cloned().collect();
-                    let (d, len) = ray(x as f64 + 0.5, y as f64 + 0.5);
-                    let t_max = if scene_z.is_finite() { scene_z * len / ground.unit } else { 1e9 };
-                    if object_hit(origin, d, &others, t_max, seed).is_some() {
+                    let k = objects.iter().position(|o| o.label == hit.label).expect("a hit names its object");
+                    if hit_among(cx, cy, &others[k]).is_some() {
                         row.3 += 1;
                     }
                 } else {
@@ -336,7 +344,7 @@ fn composite_view(v: &CaptureView, ground: &Ground, objects: &[Object], cfg: &Co
 /// fading over about half the object's size outwards and upwards.
 fn shadow_factor(q: V3, objects: &[Object], strength: f64) -> f64 {
     objects.iter().fold(1.0, |f, o| {
-        let reach = if o.shape == super::Shape::Box { o.size * std::f64::consts::SQRT_2 } else { o.size };
+        let reach = o.shape.footprint_radius(o.size);
         let d = (((q[0] - o.center[0]).powi(2) + (q[1] - o.center[1]).powi(2)).sqrt() - reach).max(0.0);
         let up = q[2].max(0.0);
         f * (1.0 - strength * (-(d / (0.6 * o.size)).powi(2) - (up / (0.3 * o.size)).powi(2)).exp())
