@@ -51,7 +51,7 @@ fn main() {
         let cfg = TrainConfig { iters: 30_000, sh_degree: scene.sh_degree, densify: false, ..Default::default() };
         let mut trainer = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
         trainer.profile = true;
-        trainer.full_sh = full_sh; // a trained scene uses all its SH bands
+        trainer.fixed_sh_degree = full_sh.then_some(cogeo::scene::MAX_SH_DEGREE); // a trained scene uses all its SH bands
         trainer.fused_step = !apart;
         trainer.iterate(&data, false).unwrap(); // warm-up
         let mut stats = common::PassStats::default();

@@ -211,7 +211,7 @@ fn frozen_groups_stay_put_and_trust_region_bounds_each_gaussian() {
 /// The fused projection-backward + Adam pass (train/fused.rs) against the passes it replaces
 /// (projection backward into zeroed gradients, the MCMC regularizer, Adam per tensor), from the same
 /// scene over several steps: SH degree 3 with its bands growing or all in use, Gaussians the views
-/// cull, frozen groups, both strategies.
+/// cull, frozen groups, both strategies, the trust region per Gaussian.
 #[test]
 fn fused_step_matches_the_passes_apart() {
     use cogeo::gpu::{DeviceChoice, Gpu};
@@ -242,16 +242,19 @@ fn fused_step_matches_the_passes_apart() {
     let train = vec![view("a", [0.0, -0.2, -3.0], &mut rng), view("b", [0.8, -0.4, -2.8], &mut rng)];
     let data = Dataset { train, test: vec![], points: vec![], extent: 2.0, warnings: vec![], pose_check: None };
     let some_frozen = Frozen { quats: true, opacity: true, ..Default::default() };
+    let some_opacity = Frozen { opacity: true, ..Default::default() };
     // (name, strategy, all SH bands from the start, frozen groups, the fused pass accumulates with
-    // compare-and-swap)
+    // compare-and-swap, trust radius per Gaussian: the removal's refinement)
     let cases = [
-        ("ADC, SH bands growing", Strategy::Adc, false, Frozen::default(), false),
-        ("ADC, all SH bands", Strategy::Adc, true, Frozen::default(), false),
-        ("ADC, all SH bands, compare-and-swap", Strategy::Adc, true, Frozen::default(), true),
-        ("MCMC, all SH bands", Strategy::Mcmc, true, Frozen::default(), false),
-        ("MCMC, rotations and opacity frozen", Strategy::Mcmc, true, some_frozen, false),
+        ("ADC, SH bands growing", Strategy::Adc, false, Frozen::default(), false, None),
+        ("ADC, all SH bands", Strategy::Adc, true, Frozen::default(), false, None),
+        ("ADC, all SH bands, compare-and-swap", Strategy::Adc, true, Frozen::default(), true, None),
+        ("MCMC, all SH bands", Strategy::Mcmc, true, Frozen::default(), false, None),
+        ("MCMC, rotations and opacity frozen", Strategy::Mcmc, true, some_frozen, false, None),
+        ("ADC, trust region 2e-3", Strategy::Adc, true, Frozen::default(), false, Some(2e-3)),
+        ("MCMC, trust region 5e-4, opacity frozen", Strategy::Mcmc, false, some_opacity, false, Some(5e-4)),
     ];
-    for (name, strategy, full_sh, frozen, cas) in cases {
+    for (name, strategy, full_sh, frozen, cas, trust_radius) in cases {
         let run = |fused: bool| {
             let cfg = TrainConfig { iters: 100, densify: false, strategy, seed: 5, ..Default::default() };
             let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
@@ -259,8 +262,9 @@ fn fused_step_matches_the_passes_apart() {
                 t.force_compare_and_swap().unwrap();
             }
             t.fused_step = fused;
-            t.full_sh = full_sh;
+            t.fixed_sh_degree = full_sh.then_some(cogeo::scene::MAX_SH_DEGREE);
             t.frozen = frozen;
+            t.trust_radius = trust_radius;
             for _ in 0..4 {
                 t.iterate(&data, false).unwrap();
             }
@@ -312,7 +316,7 @@ fn fused_step_matches_the_passes_apart() {
     let cfg = TrainConfig { iters: 100, densify: false, seed: 5, ..Default::default() };
     let (warm, moments) = {
         let mut t = Trainer::new(&gpu, &data, &scene, cfg.clone()).unwrap();
-        t.full_sh = true;
+        t.fixed_sh_degree = Some(cogeo::scene::MAX_SH_DEGREE);
         for _ in 0..2 {
             t.iterate(&data, false).unwrap();
         }

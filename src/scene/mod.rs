@@ -99,6 +99,19 @@ impl GaussianScene {
         sh_coeffs(self.sh_degree)
     }
 
+    /// The highest SH degree with a nonzero coefficient: the bands training reached (it grows
+    /// one band per 1000 iterations and leaves the others exactly zero).
+    pub fn learnt_sh_degree(&self) -> u32 {
+        let k = self.sh_coeffs();
+        (1..=self.sh_degree)
+            .rev()
+            .find(|&d| {
+                let band = sh_coeffs(d - 1)..sh_coeffs(d);
+                self.sh.chunks_exact(3 * k).any(|g| g[3 * band.start..3 * band.end].iter().any(|&c| c != 0.0))
+            })
+            .unwrap_or(0)
+    }
+
     /// Appends one Gaussian (normal 0, no extra properties). `sh` holds its 3 x `sh_coeffs()`
     /// coefficients as `self.sh` stores them: basis function b's r, g, b at 3b..3b + 3.
     pub fn push(&mut self, mean: [f32; 3], log_scales: [f32; 3], quat: [f32; 4], opacity_logit: f32, sh: &[f32]) {
@@ -206,5 +219,29 @@ impl GaussianScene {
             }
         }
         Some((out, d))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two degree-3 Gaussians: all zero above DC is degree 0; one nonzero coefficient in a band
+    /// (any Gaussian, any channel) makes that band learnt.
+    #[test]
+    fn learnt_sh_degree_is_the_highest_band_with_a_nonzero_coefficient() {
+        let k = sh_coeffs(3);
+        let mut scene = GaussianScene { sh_degree: 3, sh: vec![0.0; 2 * 3 * k], ..Default::default() };
+        scene.sh[0] = 0.7;
+        scene.sh[3 * k] = -0.2;
+        assert_eq!(scene.learnt_sh_degree(), 0);
+        // second Gaussian, basis 5 (band 2), blue
+        scene.sh[3 * k + 3 * 5 + 2] = 1e-7;
+        assert_eq!(scene.learnt_sh_degree(), 2);
+        // first Gaussian, basis 15 (band 3), red
+        scene.sh[3 * 15] = -0.1;
+        assert_eq!(scene.learnt_sh_degree(), 3);
+        let dc_only = GaussianScene { sh_degree: 0, sh: vec![0.5; 3], ..Default::default() };
+        assert_eq!(dc_only.learnt_sh_degree(), 0);
     }
 }

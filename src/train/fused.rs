@@ -3,10 +3,10 @@
 //! Adam to its elements in the same thread, so the parameter gradient tensors are never written,
 //! zeroed or read back. Apart, the projection backward and Adam move 2.5 GB per step at 1M SH-3
 //! Gaussians; fused, 1.5 GB. The same arithmetic as `Backward::record` + the MCMC regularizer +
-//! `Adam::record` per tensor (tests/train.rs compares the two paths); the trainer uses the passes
-//! apart only for the trust-region step (`Adam::record_clipped`). That clip is per Gaussian now, so
-//! it could ride in this pass too; the removal's refinement is the only user and is not where time
-//! goes.
+//! `Adam::record` per tensor (tests/train.rs compares the two paths), the trust region per Gaussian
+//! (`Adam::record_clipped`) included: each thread owns a Gaussian's rows, so it clips them itself.
+//! The removal's refinement steps in a trust region; apart, its iterations cost 1.32x a training
+//! iteration on the composited statue (fused, see bench/JOURNAL.md).
 
 use super::adam::{AdamStep, Moments};
 use crate::gpu::{dispatch_1d, Buffer, Gpu, MemoryKind, Recorder};
@@ -28,6 +28,9 @@ struct FusedAdamParams {
     scale_reg: f32,
     frozen: u32,
     sh_stepped: u32,
+    /// Each Gaussian's update of each geometry row clipped to this norm; infinite: no clip.
+    trust_radius: f32,
+    _pad: u32,
 }
 
 /// One parameter group's step: its moments, learning rate (and the rate of SH bands above the
@@ -79,7 +82,9 @@ impl ProjectBackwardAdam {
     /// view was rendered with, its `RenderParams::sh_degree`). `regularizer` = the MCMC
     /// (opacity, scale) weights, zero when off. Only the first `sh_stepped` SH coefficients per
     /// channel are stepped: the caller guarantees the others have zero moments and get no gradient
-    /// (bands not rendered yet), so a step would leave them unchanged. The constants go to one
+    /// (bands not rendered yet), so a step would leave them unchanged. With `trust_radius` each
+    /// Gaussian's update of its position, of its log-scales and of its rotation is clipped to that
+    /// norm (as `Adam::record_clipped`). The constants go to one
     /// host-visible block: one recording per submission.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
@@ -93,6 +98,7 @@ impl ProjectBackwardAdam {
         regularizer: (f32, f32),
         step: u32,
         sh_stepped: u32,
+        trust_radius: Option<f32>,
     ) -> Result<()> {
         let n = scene.num_gaussians;
         let tensors = [&scene.means, &scene.log_scales, &scene.quats, &scene.opacity_logits, &scene.sh];
@@ -105,6 +111,8 @@ impl ProjectBackwardAdam {
             scale_reg: regularizer.1 / (3 * n) as f32,
             frozen: groups.iter().enumerate().map(|(i, g)| (g.frozen as u32) << i).sum(),
             sh_stepped: sh_stepped.min(crate::scene::sh_coeffs(scene.sh_degree) as u32),
+            trust_radius: trust_radius.unwrap_or(f32::INFINITY),
+            _pad: 0,
         };
         // Constants: the rendered degree, and whether bands above it are stepped (moments of a
         // higher degree rendered before); usually not, and then their loop compiles away.

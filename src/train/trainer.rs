@@ -145,11 +145,11 @@ pub struct Trainer {
     /// When set, each Gaussian's update per step of each geometry tensor (means, scales,
     /// rotations) is clipped to this Euclidean norm (a trust region per Gaussian).
     pub trust_radius: Option<f32>,
-    /// Render with the scene's full SH degree from the first step (fine-tuning a trained scene)
-    /// instead of growing it one band per 1000 iterations.
-    pub full_sh: bool,
+    /// Render with this SH degree from the first step (fine-tuning a trained scene) instead of
+    /// growing it one band per 1000 iterations.
+    pub fixed_sh_degree: Option<u32>,
     /// Apply Adam inside the projection backward (train/fused.rs) instead of writing the parameter
-    /// gradients and running Adam per tensor; on by default, ignored for a trust-region step.
+    /// gradients and running Adam per tensor; on by default.
     pub fused_step: bool,
     fused: ProjectBackwardAdam,
     /// SH coefficients per channel whose Adam moments may be nonzero: those of every band rendered
@@ -204,7 +204,7 @@ impl Trainer {
             profile: false,
             frozen: Frozen::default(),
             trust_radius: None,
-            full_sh: false,
+            fixed_sh_degree: None,
             fused_step: true,
             sh_stepped: 0,
             fused: ProjectBackwardAdam::new(gpu, backward.uses_cas)?,
@@ -267,8 +267,8 @@ impl Trainer {
     }
 
     fn active_sh_degree(&self) -> u32 {
-        if self.full_sh {
-            return self.scene.sh_degree;
+        if let Some(d) = self.fixed_sh_degree {
+            return d.min(self.scene.sh_degree);
         }
         (self.step / 1000).min(self.scene.sh_degree)
     }
@@ -300,7 +300,7 @@ impl Trainer {
         let (frame, mut rec) = self.raster.forward_open(&self.scene, &view.camera, &settings)?;
         let outputs = self.raster.outputs().unwrap();
         self.sh_stepped = self.sh_stepped.max(sh_coeffs(self.active_sh_degree()) as u32);
-        let fused = self.fused_step && self.trust_radius.is_none();
+        let fused = self.fused_step;
         if !fused {
             self.grads.record_zero_parameters(&mut rec);
         }
@@ -401,6 +401,7 @@ impl Trainer {
             regularizer,
             self.step,
             stepped,
+            self.trust_radius,
         )?;
         rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped));
         Ok(())

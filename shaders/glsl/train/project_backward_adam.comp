@@ -26,6 +26,7 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer FusedAdam {
     float scale_reg;
     uint frozen;           // bits: 1 means, 2 log_scales, 4 quats, 8 opacity, 16 sh (no update)
     uint sh_stepped;       // SH coefficients per channel stepped; see main
+    float trust_radius;    // each Gaussian's geometry row update clipped to this norm (inf: off)
 };
 
 // Whether coefficients above the rendered bands are stepped (sh_stepped > SH_BANDS: moments of a
@@ -40,6 +41,13 @@ void step_element(Floats param, Floats m, Floats v, uint i, float g, AdamStep s,
     param.v[i] -= adam_update_value(g, m, v, i, s, rate);
 }
 
+// The factor that clips a row's update of squared norm u2 to `radius` (adam_clipped.comp's rule;
+// 1 when the radius is infinite, leaving the update exactly as it is).
+float trust_scale(float u2, float radius) {
+    float norm = sqrt(u2);
+    return norm > radius ? radius / norm : 1.0;
+}
+
 void main() {
     uint g = linear_group_id() * 256 + gl_LocalInvocationID.x;
     if (g >= p.num_gaussians) return;
@@ -48,31 +56,33 @@ void main() {
     // Everything read from the parameter blocks is copied to locals first: the stores below could
     // alias those blocks as far as the compiler knows, and would make it load them again per element.
     uint frozen = a.frozen;
+    float radius = a.trust_radius;
     if ((frozen & 1u) == 0u) {
         Floats param = a.means, m = a.m_means, v = a.v_means;
         AdamStep s = a.step_means;
-        for (uint i = 0; i < 3; i++) {
-            uint e = 3 * g + i;
-            param.v[e] = d.mean_value[i] - adam_update_value(d.mean[i], m, v, e, s, s.lr);
-        }
+        vec3 u;
+        for (uint i = 0; i < 3; i++) u[i] = adam_update_value(d.mean[i], m, v, 3 * g + i, s, s.lr);
+        float k = trust_scale(dot(u, u), radius);
+        for (uint i = 0; i < 3; i++) param.v[3 * g + i] = d.mean_value[i] - k * u[i];
     }
     if ((frozen & 2u) == 0u) {
         Floats param = a.log_scales, m = a.m_log_scales, v = a.v_log_scales;
         AdamStep s = a.step_log_scales;
         float weight = a.scale_reg;
+        vec3 u;
         for (uint i = 0; i < 3; i++) {
-            uint e = 3 * g + i;
-            float value = d.log_scale_value[i];
-            param.v[e] = value - adam_update_value(d.log_scale[i] + weight * exp(value), m, v, e, s, s.lr);
+            u[i] = adam_update_value(d.log_scale[i] + weight * exp(d.log_scale_value[i]), m, v, 3 * g + i, s, s.lr);
         }
+        float k = trust_scale(dot(u, u), radius);
+        for (uint i = 0; i < 3; i++) param.v[3 * g + i] = d.log_scale_value[i] - k * u[i];
     }
     if ((frozen & 4u) == 0u) {
         Floats param = a.quats, m = a.m_quats, v = a.v_quats;
         AdamStep s = a.step_quats;
-        for (uint i = 0; i < 4; i++) {
-            uint e = 4 * g + i;
-            param.v[e] = d.quat_value[i] - adam_update_value(d.quat[i], m, v, e, s, s.lr);
-        }
+        vec4 u;
+        for (uint i = 0; i < 4; i++) u[i] = adam_update_value(d.quat[i], m, v, 4 * g + i, s, s.lr);
+        float k = trust_scale(dot(u, u), radius);
+        for (uint i = 0; i < 4; i++) param.v[4 * g + i] = d.quat_value[i] - k * u[i];
     }
     if ((frozen & 8u) == 0u) {
         Floats param = a.opacity_logits;
