@@ -122,10 +122,65 @@ struct RemoveReport<'a> {
     scores: &'a GroundTruthScores,
 }
 
-pub fn write_views(dir: &Path, cameras: &[Camera], images: &[Vec<f32>]) -> Result<()> {
+/// Writes one PNG per camera into `dir`, the views spread over a few threads (PNG encoding and
+/// each file's sync are most of the time it takes).
+pub fn write_views(dir: &Path, cameras: &[Camera], images: &[&[f32]]) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-    for (c, img) in cameras.iter().zip(images) {
-        write_png_rgb(&dir.join(format!("{}.png", c.name)), c.width, c.height, img)?;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 8);
+    let chunk = cameras.len().div_ceil(threads).max(1);
+    std::thread::scope(|s| {
+        let writers: Vec<_> = cameras
+            .chunks(chunk)
+            .zip(images.chunks(chunk))
+            .map(|(cams, imgs)| {
+                s.spawn(move || -> Result<()> {
+                    for (c, img) in cams.iter().zip(imgs) {
+                        write_png_rgb(&dir.join(format!("{}.png", c.name)), c.width, c.height, img)?;
+                    }
+                    Ok(())
+                })
+            })
+            .collect();
+        writers.into_iter().try_for_each(|w| w.join().expect("a PNG writer panicked"))
+    })
+}
+
+fn slices(images: &[Vec<f32>]) -> Vec<&[f32]> {
+    images.iter().map(|x| x.as_slice()).collect()
+}
+
+/// The edited views' images: renders before, after and right after deletion, the hole masks and,
+/// when completion ran, the inpainted views and completed depths.
+fn write_edited_views(out: &Path, cameras: &[Camera], v: &[cogeo::removal::ViewResult], completed: bool) -> Result<()> {
+    let images = |f: fn(&cogeo::removal::ViewResult) -> &[f32]| v.iter().map(f).collect::<Vec<_>>();
+    write_views(&out.join("before"), cameras, &images(|x| &x.before))?;
+    write_views(&out.join("after"), cameras, &images(|x| &x.after))?;
+    write_views(&out.join("removed"), cameras, &images(|x| &x.removed))?;
+    std::fs::create_dir_all(out.join("mask"))?;
+    for (c, x) in cameras.iter().zip(v) {
+        // hole mask: 255 = synthesized, 128 = hole kept from other views' Gaussians
+        let m: Vec<u8> = x
+            .hole
+            .iter()
+            .zip(&x.fill)
+            .map(|(&h, &f)| {
+                if f {
+                    255
+                } else if h {
+                    128
+                } else {
+                    0
+                }
+            })
+            .collect();
+        cogeo::io::write_png(&out.join(format!("mask/{}.png", c.name)), c.width, c.height, image::ColorType::L8, &m)?;
+    }
+    if completed {
+        write_views(&out.join("inpainted"), cameras, &images(|x| &x.inpainted))?;
+        std::fs::create_dir_all(out.join("depth"))?;
+        for (c, x) in cameras.iter().zip(v) {
+            write_exr(&out.join(format!("depth/{}.exr", c.name)), c.width, c.height, &[("Y", &x.depth)])?;
+        }
     }
     Ok(())
 }
@@ -167,43 +222,20 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         &mut |stage, done, total| super::args::set_stage(&bar, stage, done, total),
     )?;
     bar.finish_and_clear();
-    // outputs: edited views, then held-out views before / after
+    // outputs: the edited views are encoded and written on other threads while the GPU renders
+    // the held-out views
     let out = &a.out;
     let v = &removal.views;
     let batch = cogeo::io::OutputBatch::begin();
-    write_views(&out.join("before"), &cameras, &v.iter().map(|x| x.before.clone()).collect::<Vec<_>>())?;
-    write_views(&out.join("after"), &cameras, &v.iter().map(|x| x.after.clone()).collect::<Vec<_>>())?;
-    write_views(&out.join("removed"), &cameras, &v.iter().map(|x| x.removed.clone()).collect::<Vec<_>>())?;
-    std::fs::create_dir_all(out.join("mask"))?;
-    for (c, x) in cameras.iter().zip(v) {
-        // hole mask: 255 = synthesized, 128 = hole kept from other views' Gaussians
-        let m: Vec<u8> = x
-            .hole
-            .iter()
-            .zip(&x.fill)
-            .map(|(&h, &f)| {
-                if f {
-                    255
-                } else if h {
-                    128
-                } else {
-                    0
-                }
-            })
-            .collect();
-        cogeo::io::write_png(&out.join(format!("mask/{}.png", c.name)), c.width, c.height, image::ColorType::L8, &m)?;
-    }
-    if opts.stages.complete {
-        write_views(&out.join("inpainted"), &cameras, &v.iter().map(|x| x.inpainted.clone()).collect::<Vec<_>>())?;
-        std::fs::create_dir_all(out.join("depth"))?;
-        for (c, x) in cameras.iter().zip(v) {
-            write_exr(&out.join(format!("depth/{}.exr", c.name)), c.width, c.height, &[("Y", &x.depth)])?;
-        }
-    }
     let test_cams: Vec<Camera> = data.test.iter().map(|v| v.camera.clone()).collect();
-    let held_out = render_held_out(&gpu, &scene, &removal.scene, &test_cams, opts.background)?;
-    write_views(&out.join("test_before"), &test_cams, &held_out.before)?;
-    write_views(&out.join("test_after"), &test_cams, &held_out.after)?;
+    let held_out = std::thread::scope(|s| -> Result<_> {
+        let writer = s.spawn(|| write_edited_views(out, &cameras, v, opts.stages.complete));
+        let held_out = render_held_out(&gpu, &scene, &removal.scene, &test_cams, opts.background);
+        writer.join().expect("the image writer panicked")?;
+        held_out
+    })?;
+    write_views(&out.join("test_before"), &test_cams, &slices(&held_out.before))?;
+    write_views(&out.join("test_after"), &test_cams, &slices(&held_out.after))?;
     // synth ground truth is stored at the dataset's resolution and in its photos' frame: it is
     // undistorted as the photos were; a downscaled run is not scored
     let frames: Vec<_> = data.test.iter().map(|v| v.undistortion.as_deref()).collect();

@@ -190,11 +190,11 @@ pub fn remove(
         // saw the completed surface
         if !photos.is_empty() {
             if completer.photo_depth {
-                correct_depths(&mut views, cameras, completer);
+                correct_depths(&mut views, cameras, completer, progress);
                 clock.lap("photo_depth");
             }
             if opts.stages.transfer {
-                transfer_colors(&mut views, cameras, completer)?;
+                transfer_colors(&mut views, cameras, completer, progress)?;
                 clock.lap("transfer");
             }
         }
@@ -283,10 +283,11 @@ fn sources_and_holes<'v>(views: &'v [EditedView]) -> (Vec<SourceView<'v>>, Vec<&
 }
 
 /// Stage 3b over every view (`cameras`, the views' own; needs the photos).
-fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Completer) {
+fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Completer, progress: Progress) {
     let mut completed = take_completions(views);
     let (sources, holes) = sources_and_holes(views);
-    let scales = completer.correct_depths(cameras, &sources, &holes, &mut completed);
+    let scales =
+        completer.correct_depths(cameras, &sources, &holes, &mut completed, &mut |d, t| progress("photo depth", d, t));
     drop((sources, holes));
     put_back(views, completed);
     for (v, scale) in views.iter_mut().zip(scales) {
@@ -295,11 +296,17 @@ fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Comp
 }
 
 /// Stage 3c over every view (`cameras`, the views' own; needs the photos).
-fn transfer_colors(views: &mut [EditedView], cameras: &[Camera], completer: &mut Completer) -> Result<()> {
+fn transfer_colors(
+    views: &mut [EditedView],
+    cameras: &[Camera],
+    completer: &mut Completer,
+    progress: Progress,
+) -> Result<()> {
     let mut completed = take_completions(views);
     let (sources, holes) = sources_and_holes(views);
     let fills: Vec<&[bool]> = views.iter().map(|v| v.masked.fill.as_slice()).collect();
-    let transferred = completer.transfer_colors(cameras, &sources, &holes, &fills, &mut completed)?;
+    let transferred = completer
+        .transfer_colors(cameras, &sources, &holes, &fills, &mut completed, &mut |d, t| progress("transfer", d, t))?;
     drop((sources, holes, fills));
     put_back(views, completed);
     for (v, t) in views.iter_mut().zip(transferred) {
