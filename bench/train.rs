@@ -8,7 +8,9 @@
 //! instead of synthetic scenes: trained scenes have the overlap and sizes real training sees.
 //!
 //! Synthetic scenes are SH degree 3 but train, like any run's first 1000 iterations, at degree 0;
-//! `--full-sh` uses all bands from the first step (the state of 90 % of a 30k-iteration run).
+//! `--full-sh` uses all bands from the first step (the state of 90 % of a 30k-iteration run). A
+//! trained scene renders the bands it learnt (`GaussianScene::learnt_sh_degree`), or all with
+//! `--full-sh`.
 //! `--apart` runs the projection backward and Adam as separate passes (train/fused.rs) instead of
 //! fused, for a comparison in one binary.
 //!
@@ -37,7 +39,8 @@ fn main() {
         let data = cogeo::scene::dataset::load(std::path::Path::new(&data), "images", 1).expect("cannot load --data");
         (scene, data)
     });
-    let full_sh = trained.is_some() || args.iter().any(|a| a == "--full-sh");
+    let is_trained = trained.is_some();
+    let full_sh = args.iter().any(|a| a == "--full-sh");
     let apart = args.iter().any(|a| a == "--apart");
     // synthetic scenes are made one at a time, as they are benchmarked
     let cases: Box<dyn Iterator<Item = (GaussianScene, Dataset)>> = match trained {
@@ -51,7 +54,10 @@ fn main() {
         let cfg = TrainConfig { iters: 30_000, sh_degree: scene.sh_degree, densify: false, ..Default::default() };
         let mut trainer = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
         trainer.profile = true;
-        trainer.fixed_sh_degree = full_sh.then_some(cogeo::scene::MAX_SH_DEGREE); // a trained scene uses all its SH bands
+        // a trained scene renders the bands it learnt, as the removal's refinement does
+        trainer.fixed_sh_degree =
+            if full_sh { Some(cogeo::scene::MAX_SH_DEGREE) } else { is_trained.then(|| scene.learnt_sh_degree()) };
+        let sh_degree = trainer.fixed_sh_degree.unwrap_or(0).min(scene.sh_degree);
         trainer.fused_step = !apart;
         trainer.iterate(&data, false).unwrap(); // warm-up
         let mut stats = common::PassStats::default();
@@ -72,7 +78,7 @@ fn main() {
              {submits} submits and {readbacks} readbacks per iteration"
         );
         stats.print("    ", roof.roof_gbps());
-        rows.push(serde_json::json!({"gaussians": n, "width": w, "height": h, "full_sh": full_sh, "fused_step": !apart, "gpu_ms": total, "wall_ms": wall_ms,
+        rows.push(serde_json::json!({"gaussians": n, "width": w, "height": h, "full_sh": full_sh, "sh_degree": sh_degree, "fused_step": !apart, "gpu_ms": total, "wall_ms": wall_ms,
             "submits_per_iteration": submits, "readbacks_per_iteration": readbacks,
             "passes": stats.json(roof.roof_gbps())}));
     }
@@ -106,7 +112,10 @@ fn main() {
             r["gaussians"],
             r["width"],
             r["height"],
-            if r["full_sh"] == true { "all bands" } else { "degree 0" },
+            match (r["full_sh"] == true, r["sh_degree"].as_u64()) {
+                (true, _) => "all bands".to_string(),
+                (false, d) => format!("degree {}", d.unwrap_or(0)),
+            },
             if r["fused_step"] == true { "fused" } else { "apart" },
             pass("blend"),
             pass("loss"),
