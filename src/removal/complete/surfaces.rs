@@ -431,7 +431,7 @@ mod tests {
         (hole, known)
     }
 
-    /// A floor around a hole with a small patch of another plane (a tenth of the band, behind the
+    /// A floor around a hole with a small patch of another plane (an eighth of the band, behind the
     /// floor) in the band: at `gap` pixels from the hole it does not run into it and is dropped;
     /// against the hole it continues into it.
     fn small_patch_beside_a_hole(gap: usize) -> usize {
