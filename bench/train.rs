@@ -57,7 +57,7 @@ fn main() {
         // a trained scene renders the bands it learnt, as the removal's refinement does
         trainer.fixed_sh_degree =
             if full_sh { Some(cogeo::scene::MAX_SH_DEGREE) } else { is_trained.then(|| scene.learnt_sh_degree()) };
-        let sh_degree = trainer.fixed_sh_degree.unwrap_or(0).min(scene.sh_degree);
+        let sh_degree = trainer.active_sh_degree();
         trainer.fused_step = !apart;
         trainer.iterate(&data, false).unwrap(); // warm-up
         let mut stats = common::PassStats::default();

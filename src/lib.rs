@@ -8,7 +8,8 @@
 //! command lines), `eval` (metrics), `synth` (datasets with exact ground truth). Helpers:
 //! `config` (every config struct's defaults come from its flags), `planes` (the plane model of
 //! inverse depth), `image_ops` (resizing, masks), `io` (image files), `flag_values` (flag
-//! parsers), `onnx` (user-supplied models), `rng` (seeded random numbers). The command line lives
+//! parsers), `onnx` (user-supplied models), `parallel` (independent CPU work over the cores), `rng`
+//! (seeded random numbers). The command line lives
 //! in the binary (src/cli).
 
 // Per-channel and per-row index loops read as the formulas they implement (c[ch] += w * color[ch]).
@@ -21,6 +22,7 @@ pub mod gpu;
 pub mod image_ops;
 pub mod io;
 pub mod onnx;
+pub mod parallel;
 pub mod planes;
 pub mod pipeline;
 pub mod removal;

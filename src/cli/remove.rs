@@ -122,27 +122,16 @@ struct RemoveReport<'a> {
     scores: &'a GroundTruthScores,
 }
 
-/// Writes one PNG per camera into `dir`, the views spread over a few threads (PNG encoding and
-/// each file's sync are most of the time it takes).
+/// Writes one PNG per camera into `dir`, the views spread over the cores (PNG encoding and each
+/// file's sync are most of the time it takes).
 pub fn write_views(dir: &Path, cameras: &[Camera], images: &[&[f32]]) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 8);
-    let chunk = cameras.len().div_ceil(threads).max(1);
-    std::thread::scope(|s| {
-        let writers: Vec<_> = cameras
-            .chunks(chunk)
-            .zip(images.chunks(chunk))
-            .map(|(cams, imgs)| {
-                s.spawn(move || -> Result<()> {
-                    for (c, img) in cams.iter().zip(imgs) {
-                        write_png_rgb(&dir.join(format!("{}.png", c.name)), c.width, c.height, img)?;
-                    }
-                    Ok(())
-                })
-            })
-            .collect();
-        writers.into_iter().try_for_each(|w| w.join().expect("a PNG writer panicked"))
-    })
+    let mut written: Vec<Result<()>> = cameras.iter().map(|_| Ok(())).collect();
+    cogeo::parallel::for_each_item(&mut written, &mut |_, _| {}, |i, result| {
+        let c = &cameras[i];
+        *result = write_png_rgb(&dir.join(format!("{}.png", c.name)), c.width, c.height, images[i]);
+    });
+    written.into_iter().collect()
 }
 
 fn slices(images: &[Vec<f32>]) -> Vec<&[f32]> {

@@ -45,19 +45,9 @@ pub struct ViewConsensus {
 /// The loss weights of every view (1, or 0 at the invented pixels a disagreeing view does not own)
 /// and what was measured.
 pub fn loss_masks(views: &[ConsensusView], tolerance: f32) -> (Vec<Vec<f32>>, Vec<ViewConsensus>) {
-    // the views are independent: a chunk of them per core
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(views.len().max(1));
-    let per = views.len().div_ceil(threads).max(1);
+    // the views are independent
     let mut verdicts = vec![ViewConsensus { deviation: None, left_out: false }; views.len()];
-    std::thread::scope(|scope| {
-        for (t, out) in verdicts.chunks_mut(per).enumerate() {
-            scope.spawn(move || {
-                for (k, verdict) in out.iter_mut().enumerate() {
-                    *verdict = judge(views, t * per + k, tolerance);
-                }
-            });
-        }
-    });
+    crate::parallel::for_each_item(&mut verdicts, &mut |_, _| {}, |i, verdict| *verdict = judge(views, i, tolerance));
     let masks = views
         .iter()
         .zip(&verdicts)

@@ -266,7 +266,8 @@ impl Trainer {
         (self.cfg.shape_lr_gain * LR_SCALE, self.cfg.shape_lr_gain * LR_ROTATION)
     }
 
-    fn active_sh_degree(&self) -> u32 {
+    /// The SH degree the next iteration renders with.
+    pub fn active_sh_degree(&self) -> u32 {
         if let Some(d) = self.fixed_sh_degree {
             return d.min(self.scene.sh_degree);
         }

@@ -20,8 +20,7 @@ void main() {
         u[k] = adam_update(grad, m, v, i, s, adam_rate(i, s));
         u2 += u[k] * u[k];
     }
-    float norm = sqrt(u2);
-    float scale = norm > radius ? radius / norm : 1.0;
+    float scale = trust_scale(u2, radius);
     for (uint k = 0; k < width; k++) {
         param.v[first + k] -= scale * u[k];
     }

@@ -29,3 +29,11 @@ float adam_update_value(float g, Floats m, Floats v, uint i, AdamStep s, float r
 float adam_update(Floats grad, Floats m, Floats v, uint i, AdamStep s, float rate) {
     return adam_update_value(grad.v[i], m, v, i, s, rate);
 }
+
+// The factor that clips a row's update of squared norm u2 to Euclidean norm `radius` (a trust
+// region per Gaussian: adam_clipped.comp and project_backward_adam.comp); 1 when the radius is
+// infinite, leaving the update exactly as it is.
+float trust_scale(float u2, float radius) {
+    float norm = sqrt(u2);
+    return norm > radius ? radius / norm : 1.0;
+}

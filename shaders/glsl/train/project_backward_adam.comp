@@ -41,13 +41,6 @@ void step_element(Floats param, Floats m, Floats v, uint i, float g, AdamStep s,
     param.v[i] -= adam_update_value(g, m, v, i, s, rate);
 }
 
-// The factor that clips a row's update of squared norm u2 to `radius` (adam_clipped.comp's rule;
-// 1 when the radius is infinite, leaving the update exactly as it is).
-float trust_scale(float u2, float radius) {
-    float norm = sqrt(u2);
-    return norm > radius ? radius / norm : 1.0;
-}
-
 void main() {
     uint g = linear_group_id() * 256 + gl_LocalInvocationID.x;
     if (g >= p.num_gaussians) return;

@@ -30,6 +30,7 @@ pub mod surfaces;
 pub mod transfer;
 
 use crate::gpu::Gpu;
+use crate::parallel::for_each_item;
 use crate::planes::Plane;
 use crate::scene::Camera;
 use anyhow::Result;
@@ -246,12 +247,12 @@ impl Completer {
         completed: &mut [Completed],
         progress: &mut dyn FnMut(usize, usize),
     ) -> Vec<DepthScale> {
-        let n = completed.len();
-        let mut scales = vec![DepthScale::unchanged(); n];
-        per_view_in_parallel(completed, &mut scales, progress, |i, c, scale| {
+        let mut views: Vec<(&mut Completed, DepthScale)> =
+            completed.iter_mut().map(|c| (c, DepthScale::unchanged())).collect();
+        for_each_item(&mut views, progress, |i, (c, scale)| {
             *scale = correct_hole_depth(i, &cameras[i], &mut c.depth, holes[i], sources, PHOTO_DEPTH_TOLERANCE);
         });
-        scales
+        views.into_iter().map(|(_, scale)| scale).collect()
     }
 
     /// Stage 3c, depth-guided color transfer over the whole `hole` of every view (covered pixels
@@ -273,8 +274,8 @@ impl Completer {
         // the captured colors each view finds are independent of the other views' finds: in
         // parallel, the first half of the stage's progress
         let mut found: Vec<Option<Transfer>> = (0..n).map(|_| None).collect();
-        per_view_in_parallel(completed, &mut found, &mut |d, _| progress(d, 2 * n), |i, c, t| {
-            *t = Some(transfer(i, &cameras[i], &c.depth, holes[i], sources, TRANSFER_TOLERANCE));
+        for_each_item(&mut found, &mut |d, _| progress(d, 2 * n), |i, t| {
+            *t = Some(transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE));
         });
         let found: Vec<Transfer> = found.into_iter().map(|t| t.expect("every view ran")).collect();
         // with shared inventions the view with the most left to invent goes first: it invents once
@@ -448,36 +449,4 @@ impl Completer {
 /// kept, but no texture source, since few views or none constrained those Gaussians.
 fn leftover(hole: &[bool], fill: &[bool]) -> Vec<bool> {
     hole.iter().zip(fill).map(|(&m, &f)| m && !f).collect()
-}
-
-/// Runs `work(i, completed[i], out[i])` for every view on a few threads, reporting each view
-/// done to `progress` (done, total) from the calling thread.
-fn per_view_in_parallel<T: Send>(
-    completed: &mut [Completed],
-    out: &mut [T],
-    progress: &mut dyn FnMut(usize, usize),
-    work: impl Fn(usize, &mut Completed, &mut T) + Sync,
-) {
-    let n = completed.len();
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).min(n.max(1));
-    let per = n.div_ceil(threads).max(1);
-    let (done_tx, done_rx) = std::sync::mpsc::channel::<()>();
-    std::thread::scope(|scope| {
-        for (t, (chunk, outs)) in completed.chunks_mut(per).zip(out.chunks_mut(per)).enumerate() {
-            let (work, done_tx) = (&work, done_tx.clone());
-            scope.spawn(move || {
-                for (k, (c, o)) in chunk.iter_mut().zip(outs).enumerate() {
-                    work(t * per + k, c, o);
-                    let _ = done_tx.send(());
-                }
-            });
-        }
-        drop(done_tx);
-        for done in 1..=n {
-            if done_rx.recv().is_err() {
-                break; // a worker panicked; the scope re-raises it
-            }
-            progress(done, n);
-        }
-    });
 }
