@@ -250,6 +250,32 @@ pub fn feather(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<f32> {
         .collect()
 }
 
+/// Sums of `img` (`channels` planes of `w` x `h`) over the (2r+1)^2 window around each pixel,
+/// the window cut at the borders: sums, not means, so that a weight plane blurred alongside
+/// gives normalized convolution (blur of values over blur of weights).
+pub fn box_sum(img: &[f32], w: usize, h: usize, channels: usize, r: usize) -> Vec<f32> {
+    let n = w * h;
+    let mut rows = vec![0f32; channels * n];
+    for c in 0..channels {
+        for y in 0..h {
+            let line = &img[c * n + y * w..c * n + (y + 1) * w];
+            for x in 0..w {
+                rows[c * n + y * w + x] = line[x.saturating_sub(r)..=(x + r).min(w - 1)].iter().sum();
+            }
+        }
+    }
+    let mut out = vec![0f32; channels * n];
+    for c in 0..channels {
+        for y in 0..h {
+            for x in 0..w {
+                out[c * n + y * w + x] =
+                    (y.saturating_sub(r)..=(y + r).min(h - 1)).map(|v| rows[c * n + v * w + x]).sum();
+            }
+        }
+    }
+    out
+}
+
 /// Concatenates planar RGB images of one height side by side, 2-pixel white gaps, into RGB8.
 pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>) {
     let gap = 2;
@@ -270,6 +296,24 @@ pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>)
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn box_sum_counts_the_window_cut_at_the_borders() {
+        // a plane of ones gives each pixel the size of its window; one channel of index values
+        // gives the closed-form sum over the window
+        let (w, h, r) = (7usize, 5usize, 2usize);
+        let mut img = vec![1f32; w * h];
+        img.extend((0..w * h).map(|p| p as f32));
+        let s = box_sum(&img, w, h, 2, r);
+        for y in 0..h {
+            for x in 0..w {
+                let (xs, ys) = (x.saturating_sub(r)..=(x + r).min(w - 1), y.saturating_sub(r)..=(y + r).min(h - 1));
+                assert_eq!(s[y * w + x], (xs.clone().count() * ys.clone().count()) as f32);
+                let want: usize = ys.flat_map(|v| xs.clone().map(move |u| v * w + u)).sum();
+                assert_eq!(s[w * h + y * w + x], want as f32);
+            }
+        }
+    }
     use super::*;
 
     #[test]

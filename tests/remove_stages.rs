@@ -306,13 +306,17 @@ fn nearest_copy_fill_copies_the_nearest_remaining_gaussian() {
 /// Color transfer on a fronto-parallel plane z = 5 seen by two translated cameras, where pixel and
 /// world coordinates are affinely related: at the true depth every target pixel off the target's
 /// own hole keeps its own photo's color exactly (the own capture comes first); in the hole, every
-/// pixel that the source sees gets exactly the source photo's color of its surface point; off the
-/// source's image, in its hole, or at a depth 10 % off, nothing is transferred.
+/// pixel that the source sees gets exactly the source photo's color of its surface point plus the
+/// blue cast by which the target's own photo differs from the source's around the hole (local
+/// color matching); off the source's image, in its hole, or at a depth 10 % off, nothing is
+/// transferred.
 #[test]
 fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
     use cogeo::removal::complete::source_views::SourceView;
     use cogeo::removal::complete::transfer::transfer;
+    use cogeo::scene::exposure::ColorAffine;
     use cogeo::scene::Camera;
+    const IDENTITY: ColorAffine = ColorAffine::IDENTITY;
     let (w, h) = (40usize, 30usize);
     let cam = |name: &str, x: f64| {
         Camera::look_at(name, w as u32, h as u32, 60.0, [x, 0.0, 0.0], [x, 0.0, 5.0], [0.0, -1.0, 0.0])
@@ -348,8 +352,22 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
     let depth = vec![5.0f32; w * h];
     let alpha = vec![1.0f32; w * h];
     let sources = [
-        SourceView { camera: &target_cam, photo: &own_photo, hole: &hole, depth: &depth, alpha: &alpha },
-        SourceView { camera: &source_cam, photo: &photo, hole: &hole, depth: &depth, alpha: &alpha },
+        SourceView {
+            camera: &target_cam,
+            photo: &own_photo,
+            hole: &hole,
+            depth: &depth,
+            alpha: &alpha,
+            photo_colors: IDENTITY,
+        },
+        SourceView {
+            camera: &source_cam,
+            photo: &photo,
+            hole: &hole,
+            depth: &depth,
+            alpha: &alpha,
+            photo_colors: IDENTITY,
+        },
     ];
     let fill = vec![true; w * h];
     let t = transfer(0, &target_cam, &depth, &fill, &sources, 0.05);
@@ -377,7 +395,8 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
         if t.found[p] && x > 3.0 && x < w as f64 - 3.0 && y > 3.0 && y < h as f64 - 3.0 {
             let c = color(pt);
             for (k, &ck) in c.iter().enumerate() {
-                assert!((t.rgb[k * w * h + p] as f64 - ck).abs() < 5e-4, "pixel {p} channel {k}");
+                let cast = if k == 2 { 0.2 } else { 0.0 };
+                assert!((t.rgb[k * w * h + p] as f64 - ck - cast).abs() < 5e-4, "pixel {p} channel {k}");
             }
             found += 1;
         }
@@ -387,6 +406,75 @@ fn color_transfer_takes_the_color_other_views_saw_at_the_completed_depth() {
     let off = vec![5.5f32; w * h];
     let t = transfer(0, &target_cam, &off, &fill, &sources, 0.05);
     assert!(t.found.iter().all(|&f| !f));
+}
+
+/// The same two views, each photo with its own per-channel gains (exposure and white balance) of
+/// the scene's colors, and the target's whole image covered (no own pixel to match locally): the
+/// transfer maps the source's colors back through its gains and on through the target's, so the
+/// hole takes the target's colors of each surface point (to the Lanczos-3 interpolation's 5e-4);
+/// the source's raw colors are 20-45 % off.
+#[test]
+fn color_transfer_maps_a_source_photos_exposure_to_the_targets() {
+    use cogeo::removal::complete::source_views::SourceView;
+    use cogeo::removal::complete::transfer::transfer;
+    use cogeo::scene::exposure::ColorAffine;
+    use cogeo::scene::Camera;
+    let (w, h) = (40usize, 30usize);
+    let cam = |name: &str, x: f64| {
+        Camera::look_at(name, w as u32, h as u32, 60.0, [x, 0.0, 0.0], [x, 0.0, 5.0], [0.0, -1.0, 0.0])
+    };
+    let (target_cam, source_cam) = (cam("t", 0.0), cam("s", 0.4));
+    let color = |p: [f64; 3]| [0.4 + 0.1 * p[0], 0.4 + 0.1 * p[1], 0.3];
+    let (target_gains, source_gains) = ([1.1, 0.9, 1.2], [0.8, 1.25, 0.75]);
+    let photo_of = |c: &Camera, gains: [f64; 3]| {
+        let mut img = vec![0f32; 3 * w * h];
+        for p in 0..w * h {
+            let pt = c.pixel_point(p % w, p / w, 5.0);
+            let rgb = color(pt);
+            for k in 0..3 {
+                img[k * w * h + p] = (gains[k] * rgb[k]) as f32;
+            }
+        }
+        img
+    };
+    let (own_photo, photo) = (photo_of(&target_cam, target_gains), photo_of(&source_cam, source_gains));
+    let (covered, open) = (vec![true; w * h], vec![false; w * h]);
+    let (depth, alpha) = (vec![5.0f32; w * h], vec![1.0f32; w * h]);
+    let sources = [
+        SourceView {
+            camera: &target_cam,
+            photo: &own_photo,
+            hole: &covered,
+            depth: &depth,
+            alpha: &alpha,
+            photo_colors: ColorAffine::gains(target_gains),
+        },
+        SourceView {
+            camera: &source_cam,
+            photo: &photo,
+            hole: &open,
+            depth: &depth,
+            alpha: &alpha,
+            photo_colors: ColorAffine::gains(source_gains),
+        },
+    ];
+    let t = transfer(0, &target_cam, &depth, &vec![true; w * h], &sources, 0.05);
+    let mut checked = 0;
+    for p in 0..w * h {
+        let pt = target_cam.pixel_point(p % w, p / w, 5.0);
+        let (x, y, _) = source_cam.project_to_image(pt).map_or((-1.0, -1.0, 0.0), |v| v);
+        if !(x > 3.0 && x < w as f64 - 3.0 && y > 3.0 && y < h as f64 - 3.0) {
+            continue;
+        }
+        assert!(t.found[p], "pixel {p}: the source saw it");
+        let c = color(pt);
+        for k in 0..3 {
+            let (got, want) = (t.rgb[k * w * h + p] as f64, target_gains[k] * c[k]);
+            assert!((got - want).abs() < 5e-4, "pixel {p} channel {k}: {got} vs the target's {want}");
+        }
+        checked += 1;
+    }
+    assert!(checked > 500, "{checked} pixels checked");
 }
 
 #[test]
@@ -430,7 +518,14 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     let sources: Vec<SourceView> = cams
         .iter()
         .zip(&photos)
-        .map(|(camera, photo)| SourceView { camera, photo, hole: &no_hole, depth: &depth, alpha: &alpha })
+        .map(|(camera, photo)| SourceView {
+            camera,
+            photo,
+            hole: &no_hole,
+            depth: &depth,
+            alpha: &alpha,
+            photo_colors: cogeo::scene::exposure::ColorAffine::IDENTITY,
+        })
         .collect();
     // two holes whose completed depth is 2 % too near and 1 % too far
     let in_a = |p: usize| (16..40).contains(&(p % w)) && (18..42).contains(&(p / w));

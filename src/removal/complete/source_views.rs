@@ -2,6 +2,7 @@
 //! alpha), and the geometry both photo-consistent depth and color transfer ask of them: a pixel's
 //! world point, where a point lands in a view, and whether that view saw it.
 
+use crate::scene::exposure::ColorAffine;
 use crate::scene::Camera;
 
 /// One edited view as the other views see it.
@@ -14,6 +15,9 @@ pub struct SourceView<'a> {
     /// Expected depth and alpha of the original render (with the objects).
     pub depth: &'a [f32],
     pub alpha: &'a [f32],
+    /// The photo's colors as an affine map of the scene's (what the original render shows):
+    /// its exposure and white balance, which the color transfer takes out.
+    pub photo_colors: ColorAffine,
 }
 
 /// World point of pixel `p` (center, row-major index) of `camera` at view depth `z`.
