@@ -152,7 +152,7 @@ pub fn refine(
     if let Some(m) = masks {
         t.set_loss_masks(m)?;
     }
-    let psnr_before = t.evaluate(&data.train)?.psnr;
+    let psnr_before = t.mean_psnr(&data.train)?;
     let frozen_iters = ((cfg.iters as f32) * cfg.frozen_fraction.clamp(0.0, 1.0)).round() as u32;
     while t.step < cfg.iters {
         if t.step < frozen_iters {
@@ -165,7 +165,7 @@ pub fn refine(
         t.iterate(&data, false)?;
         progress(t.step);
     }
-    let psnr_after = t.evaluate(&data.train)?.psnr;
+    let psnr_after = t.mean_psnr(&data.train)?;
     let mut out = t.download_scene()?;
     // no densification: Gaussians keep their order, so the extra properties (labels) carry over
     if out.len() == scene.len() {
