@@ -296,6 +296,7 @@ pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>)
 
 #[cfg(test)]
 mod tests {
+    use super::*;
 
     #[test]
     fn box_sum_counts_the_window_cut_at_the_borders() {
@@ -314,7 +315,6 @@ mod tests {
             }
         }
     }
-    use super::*;
 
     #[test]
     fn distance_and_dilation() {

@@ -521,7 +521,6 @@ impl Trainer {
         self.replace_scene(&out, &keep)
     }
 
-    /// Renders `views` and compares them with their images: mean PSNR and SSIM.
     /// The mean over `views` of `evaluate`'s raw PSNR alone: without SSIM and the exposure-fitted
     /// scores, whose CPU work was most of the time of the removal's two evaluations.
     pub fn mean_psnr(&mut self, views: &[View]) -> Result<f64> {
@@ -541,6 +540,7 @@ impl Trainer {
         Ok(if views.is_empty() { 0.0 } else { sum / views.len() as f64 })
     }
 
+    /// Renders `views` and compares them with their images: mean PSNR and SSIM.
     pub fn evaluate(&mut self, views: &[View]) -> Result<Metrics> {
         let mut metrics = Metrics { views: views.len(), ..Default::default() };
         if views.is_empty() {

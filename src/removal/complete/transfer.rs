@@ -36,7 +36,7 @@ const LOCAL_MATCH_MAX_DIFFERENCE: f64 = 0.2;
 ///
 /// Another view's photo differs from the target's in exposure, white balance and the light the
 /// surface sends its way, so its colors are matched to the target's twice (cup composite, masked
-/// PSNR 24.44 -> 25.30 dB, LPIPS 0.043 -> 0.037; without it, a patchwork of the sources' tints):
+/// PSNR 24.44 -> 25.21 dB, LPIPS 0.043 -> 0.038; without it, a patchwork of the sources' tints):
 /// - globally, through the inverse of the source's photo colors and then the target's
 ///   (`SourceView::photo_colors`), as --exposure training's maps would;
 /// - locally, by the mean difference between the target's own photo and the other sources over
