@@ -521,21 +521,22 @@ impl Trainer {
         self.replace_scene(&out, &keep)
     }
 
-    /// The mean over `views` of `evaluate`'s raw PSNR alone: without SSIM and the exposure-fitted
-    /// scores, whose CPU work was most of the time of the removal's two evaluations.
-    pub fn mean_psnr(&mut self, views: &[View]) -> Result<f64> {
-        let settings = RenderSettings {
+    /// How `evaluate` and `mean_psnr` render: the training's background, the current SH degree.
+    fn evaluation_settings(&self) -> RenderSettings {
+        RenderSettings {
             background: self.cfg.background,
             sh_degree: Some(self.active_sh_degree()),
             ..Default::default()
-        };
+        }
+    }
+
+    /// The mean over `views` of `evaluate`'s raw PSNR alone: without SSIM and the exposure-fitted
+    /// scores, whose CPU work was most of the time of the removal's two evaluations.
+    pub fn mean_psnr(&mut self, views: &[View]) -> Result<f64> {
+        let settings = self.evaluation_settings();
         let mut sum = 0.0;
         for v in views {
-            let out = self.raster.render(&self.scene, &v.camera, &settings)?;
-            let mse =
-                out.rgb.iter().zip(&v.image).map(|(&a, &b)| (a.clamp(0.0, 1.0) as f64 - b as f64).powi(2)).sum::<f64>()
-                    / out.rgb.len() as f64;
-            sum += 10.0 * (1.0 / mse.max(1e-12)).log10();
+            sum += render_psnr(&self.raster.render(&self.scene, &v.camera, &settings)?.rgb, &v.image);
         }
         Ok(if views.is_empty() { 0.0 } else { sum / views.len() as f64 })
     }
@@ -546,11 +547,7 @@ impl Trainer {
         if views.is_empty() {
             return Ok(metrics);
         }
-        let settings = RenderSettings {
-            background: self.cfg.background,
-            sh_degree: Some(self.active_sh_degree()),
-            ..Default::default()
-        };
+        let settings = self.evaluation_settings();
         let n = views.len() as f64;
         for v in views {
             let out = self.raster.render(&self.scene, &v.camera, &settings)?;
@@ -561,10 +558,9 @@ impl Trainer {
                 (&clamped, &mut metrics.psnr, &mut metrics.ssim),
                 (&fitted, &mut metrics.psnr_exposure_fitted, &mut metrics.ssim_exposure_fitted),
             ] {
+                *psnr += render_psnr(rgb, &v.image) / n;
                 let x: Vec<f64> = rgb.iter().map(|&c| c.clamp(0.0, 1.0) as f64).collect();
                 let y: Vec<f64> = v.image.iter().map(|&c| c as f64).collect();
-                let mse = x.iter().zip(&y).map(|(a, b)| (a - b).powi(2)).sum::<f64>() / x.len() as f64;
-                *psnr += 10.0 * (1.0 / mse.max(1e-12)).log10() / n;
                 *ssim += loss_ref::ssim(&x, &y, w, h, None) / n;
             }
         }
@@ -610,4 +606,10 @@ impl Trainer {
         self.sh_stepped = last_nonzero.map_or(0, |c| c as u32 + 1);
         Ok(())
     }
+}
+
+/// PSNR in f64 of a render, clamped to [0, 1] as it is displayed, against its image.
+fn render_psnr(render: &[f32], image: &[f32]) -> f64 {
+    let se: f64 = render.iter().zip(image).map(|(&a, &b)| (a.clamp(0.0, 1.0) as f64 - b as f64).powi(2)).sum();
+    10.0 * (1.0 / (se / render.len() as f64).max(1e-12)).log10()
 }
