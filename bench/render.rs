@@ -2,6 +2,10 @@
 //!
 //!   cargo bench --bench render [-- --sizes 100000,1000000,3000000 --resolutions 512x512,1920x1080 --frames 3]
 //!
+//! `--write-scenes DIR` also writes each scene as `DIR/scene-<n>.ply` and each camera as
+//! `DIR/camera-<w>x<h>.json` (intrinsics and the 4x4 world-to-camera matrix), so that a peer
+//! rasterizer (scripts/gsplat_peer.py) can time the very same scene and camera.
+//!
 //! Prints a table, writes bench/results/render-<device>.json and replaces the render table of
 //! bench/RESULTS.md (unless --no-results).
 
@@ -17,6 +21,10 @@ fn main() {
     let sizes = common::counts(&args, "--sizes", "100000,1000000,3000000");
     let resolutions = common::resolutions(&args, "--resolutions", "512x512,1920x1080");
     let frames: usize = common::arg(&args, "--frames").map(|f| f.parse().unwrap()).unwrap_or(3);
+    let write_dir = common::arg(&args, "--write-scenes").map(std::path::PathBuf::from);
+    if let Some(dir) = &write_dir {
+        std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("--write-scenes {}: {e}", dir.display()));
+    }
     let gpu = common::gpu();
     println!("device: {}", gpu.info().summary());
     let roof = common::copy_bandwidth(&gpu);
@@ -26,12 +34,23 @@ fn main() {
         let t = Instant::now();
         let scene = common::synthetic_scene(n, 3, 1);
         let buffers = SceneBuffers::upload(&gpu, &scene, None).unwrap();
+        if let Some(dir) = &write_dir {
+            cogeo::scene::ply::write_ply(&scene, &dir.join(format!("scene-{n}.ply"))).unwrap();
+        }
         drop(scene);
         println!("scene: {n} Gaussians, SH degree 3 (generated and uploaded in {:.1} s)", t.elapsed().as_secs_f64());
         for &(w, h) in &resolutions {
             let cam = Camera::look_at("bench", w, h, 60.0, [0.0, -0.5, -5.5], [0.0; 3], [0.0, -1.0, 0.0]);
             let settings = RenderSettings { timestamps: true, ..Default::default() };
-            raster.render(&buffers, &cam, &settings).unwrap(); // warm-up: allocations, pipeline caches
+            if let Some(dir) = &write_dir {
+                write_camera(&cam, settings.near, &dir.join(format!("camera-{w}x{h}.json")));
+            }
+            // Warm-up: allocations and pipeline caches, and a second of load so that a GPU's clocks
+            // have left idle (an H100 read 345 MHz idle; one warm-up frame timed 2-5x slow there).
+            let warm = Instant::now();
+            while warm.elapsed().as_secs_f64() < 1.0 {
+                raster.render(&buffers, &cam, &settings).unwrap();
+            }
             let mut stats = common::PassStats::default();
             let mut wall = Vec::new();
             let mut isect = 0;
@@ -87,4 +106,16 @@ fn main() {
         &path,
         &serde_json::json!({ "device": gpu.info().summary(), "copy_bandwidth": roof, "frames": frames, "rows": rows }),
     );
+}
+
+/// The camera as a peer rasterizer takes it: pinhole intrinsics, world-to-camera 4x4 (row-major,
+/// OpenCV axes as in conventions.md) and the near plane.
+fn write_camera(cam: &Camera, near: f32, path: &std::path::Path) {
+    let (r, t) = (cam.rotation, cam.translation);
+    let view: Vec<[f64; 4]> = (0..3).map(|i| [r[i][0], r[i][1], r[i][2], t[i]]).chain([[0.0, 0.0, 0.0, 1.0]]).collect();
+    let json = serde_json::json!({
+        "width": cam.width, "height": cam.height, "fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy,
+        "viewmat": view, "near": near,
+    });
+    std::fs::write(path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
 }

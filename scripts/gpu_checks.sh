@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The GPU checks of ../shared/docs/gpu.md in one command, for a lent NVIDIA machine (device tool).
+# Prepared here (see bench/JOURNAL.md, 2026-11-26): .gpu/bin.tar.xz holds the stripped `cogeo`
+# binary, every test binary and the render/sort/train benches, built with
+# CARGO_TARGET_DIR=/tmp/tgt3 from /work/main (the paths the test binaries were compiled with);
+# .gpu/shared holds the part of ../shared the tests read (data/splats, data/statue/sparse, one
+# statue photo, models/lpips_alex_v0.1.onnx); .gl the .debs of libvulkan1 AND libglvnd0 libegl1
+# libgl1 libglx0 libgles2 libopengl0 (NVIDIA's ICD needs glvnd: with the loader alone no driver is
+# found); .whl gsplat's wheel. Run there as:  bash scripts/gpu_checks.sh   (carry .gl .gpu .whl)
+# Writes under $OUT: devices.txt, bench.log, tests.log, gsplat.log, gsplat_build.log, results.tar.
+set -u
+t0=$(date +%s)
+elapsed() { echo $(( $(date +%s) - t0 )); }
+OUT=${OUT:-/tmp/out}; mkdir -p "$OUT"
+
+for f in .gl/*.deb; do dpkg -x "$f" /; done; ldconfig
+icd=$(find /usr/local/nvidia /usr/share/vulkan /etc/vulkan -name 'nvidia_icd*.json' 2>/dev/null | head -1)
+echo "Vulkan ICD: ${icd:-none found}"; [ -n "$icd" ] && export VK_DRIVER_FILES=$icd
+export XDG_RUNTIME_DIR=/tmp COGEO_VALIDATE=0 RUST_BACKTRACE=1
+
+# gsplat compiles its CUDA kernels on first use: start that now, beside the cogeo runs.
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .whl/*.whl
+export PYTHONPATH=/tmp/site
+(MAX_JOBS=12 TORCH_CUDA_ARCH_LIST=9.0 nice -n 5 python3 -c "from gsplat.cuda._backend import _C; print('built', _C)" \
+    > "$OUT/gsplat_build.log" 2>&1; echo "build finished at $(elapsed) s" >> "$OUT/gsplat_build.log") &
+build=$!
+
+# The binaries expect the paths they were built with.
+tar xJf .gpu/bin.tar.xz -C /tmp
+mkdir -p /work /tmp/tgt3/release
+[ "$PWD" = /work/main ] || ln -sfn "$PWD" /work/main
+[ -e /work/shared ] || ln -sfn "$PWD/.gpu/shared" /work/shared
+cp /tmp/t/cogeo /tmp/tgt3/release/cogeo
+ort=$(python3 -c 'import onnxruntime, os, glob; print(sorted(glob.glob(os.path.dirname(onnxruntime.__file__) + "/capi/libonnxruntime.so*"))[0])' 2>/dev/null)
+[ -n "$ort" ] && export ORT_DYLIB_PATH=$ort
+
+{ nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.max.sm --format=csv; /tmp/t/cogeo devices; } > "$OUT/devices.txt" 2>&1
+cat "$OUT/devices.txt"
+if ! /tmp/t/cogeo devices >/dev/null 2>&1; then
+    echo "no Vulkan device: loader diagnostics follow"; cat "$icd"; ldconfig -p | grep -iE "nvidia|GLdispatch" | head
+    VK_LOADER_DEBUG=error,warn,driver /tmp/t/cogeo devices 2>&1 | tail -20
+    exit 1
+fi
+
+{
+    echo "== render ($(elapsed) s)"
+    timeout 120 /tmp/t/bench/render --sizes 1000000,3000000 --resolutions 1920x1080 --frames 10 --no-results --write-scenes /tmp/scenes
+    echo "== sort ($(elapsed) s)"
+    timeout 60 /tmp/t/bench/sort --no-results
+    echo "== train ($(elapsed) s)"
+    timeout 120 /tmp/t/bench/train --sizes 1000000,3000000 --resolution 1920x1080 --iters 10 --full-sh --no-results
+    echo "== benches done ($(elapsed) s)"
+} > "$OUT/bench.log" 2>&1
+grep -E "^device|GPU total|GPU [0-9.]+ ms|ms/iter|iteration|Gaussians" "$OUT/bench.log" | head -30
+
+# The whole test suite, one binary at a time; stop starting new ones past the deadline.
+for t in /tmp/t/tests/*; do
+    if [ "$(elapsed)" -gt 330 ]; then echo "SKIPPED (deadline): $(basename "$t")" >> "$OUT/tests.log"; continue; fi
+    echo "== $(basename "$t") ($(elapsed) s)" >> "$OUT/tests.log"
+    timeout 100 "$t" --test-threads 8 --skip statue_capture_rotations_are_repaired >> "$OUT/tests.log" 2>&1; echo "exit $?" >> "$OUT/tests.log"
+done
+grep -E "^== |^test result|exit [^0]|FAILED|panicked|SKIPPED" "$OUT/tests.log" | grep -v "exit 0" | head -80
+
+# gsplat on the same scenes and cameras.
+while kill -0 $build 2>/dev/null && [ "$(elapsed)" -lt 470 ]; do sleep 2; done
+tail -5 "$OUT/gsplat_build.log"
+timeout $(( 530 - $(elapsed) )) python3 scripts/gsplat_peer.py /tmp/scenes --json "$OUT/gsplat.json" > "$OUT/gsplat.log" 2>&1
+tail -8 "$OUT/gsplat.log"
+tar cf "$OUT/results.tar" -C bench/results . 2>/dev/null
+echo "done at $(elapsed) s"
