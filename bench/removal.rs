@@ -8,7 +8,8 @@
 //!                                  --width 160 --height 120 --views 16 --supersample 1 --repeat-full
 //!                                  --retrain 2 --lpips-model lpips.onnx --fid-model inception.onnx
 //!                                  --exposure-jitter 0.2 --variants "cogeo (full),removal only"
-//!                                  --real-downscale 1 --real-iters 800 --no-results]
+//!                                  --real-downscale 1 --real-iters 800 --reuse-composites
+//!                                  --no-results]
 //!
 //! `--scenes` names scenes, or the groups `synth` (the default: the three rooms), `real`
 //! (statue-one, statue-two-of-three, cup-one, cup-two-of-three; hours on 2 CPU cores at full
@@ -18,7 +19,9 @@
 //! `removal-table` markers of bench/RESULTS.md (unless --no-results); real scenes write
 //! removal-real-<device>.json, removal-real-contact-sheet.png and the `removal-real-table`
 //! markers; a rerun of some real scenes keeps the others' rows, and `--real-table-only` rebuilds
-//! the table and sheet from the stored rows without running anything. `--variants` keeps the
+//! the table and sheet from the stored rows without running anything. `--reuse-composites` keeps
+//! each real scene's trained and tagged composite and reuses it on later runs (removal_real.rs),
+//! so that runs of two commits compare on the same training. `--variants` keeps the
 //! variants whose names start with one of the given prefixes.
 //! `--supersample N` makes the scenes with
 //! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
@@ -98,6 +101,9 @@ struct Training<'a> {
     exposure: bool,
     /// Score with `cogeo eval --fit-exposure` (captures whose views' exposure varies).
     fit_exposure: bool,
+    /// Where trained and tagged scenes are kept between runs (`--reuse-composites`), one folder
+    /// per training seed; None trains and tags afresh.
+    reuse: Option<PathBuf>,
 }
 
 impl Training<'_> {
@@ -108,26 +114,52 @@ impl Training<'_> {
         let data = self.data;
         let layout = Layout { out: dir };
         let capture = Capture::at(data);
-        let mut train_args = pipeline::train(&capture, &layout.train());
-        train_args.extend(pipeline::synth_training(self.iters.parse().expect("--iters is a number"), seed));
-        if self.exposure {
-            train_args.push("--exposure".into());
-        }
-        cogeo(&train_args);
-        let train_metrics = read_json(&layout.train().join("metrics.json"));
         let mut methods: Vec<&str> = variants.iter().map(|v| v.1).collect();
         methods.sort();
         methods.dedup();
-        for method in methods {
-            let tagged = dir.join(format!("tagged_{method}.ply"));
-            cogeo(&pipeline::tag(
-                &layout.trained_scene(),
-                &capture,
-                Objects::Masks("object_mask"),
-                Some(method),
-                &tagged,
-            ));
+        let tagged_name = |method: &str| format!("tagged_{method}.ply");
+        // a kept training is reused only when it holds every tagging the variants ask for
+        let kept = self.reuse.as_ref().map(|r| r.join(format!("seed{seed}")));
+        let reusable = kept.as_ref().filter(|k| {
+            k.join("train/scene.ply").is_file() && methods.iter().all(|m| k.join(tagged_name(m)).is_file())
+        });
+        if let Some(k) = reusable {
+            eprintln!("{}: reusing the training and tagging kept in {}", self.name, k.display());
+            copy_tree(&k.join("train"), &layout.train());
+            for m in &methods {
+                std::fs::copy(k.join(tagged_name(m)), dir.join(tagged_name(m))).expect("cannot copy a kept tagging");
+            }
+        } else {
+            let mut train_args = pipeline::train(&capture, &layout.train());
+            train_args.extend(pipeline::synth_training(self.iters.parse().expect("--iters is a number"), seed));
+            if self.exposure {
+                train_args.push("--exposure".into());
+            }
+            cogeo(&train_args);
+            for method in &methods {
+                let tagged = dir.join(tagged_name(method));
+                cogeo(&pipeline::tag(
+                    &layout.trained_scene(),
+                    &capture,
+                    Objects::Masks("object_mask"),
+                    Some(method),
+                    &tagged,
+                ));
+            }
+            if let Some(k) = &kept {
+                // written aside, then moved: an interrupted run leaves no half-kept training
+                let partial = k.with_extension("partial");
+                std::fs::remove_dir_all(&partial).ok();
+                copy_tree(&layout.train(), &partial.join("train"));
+                for m in &methods {
+                    std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m))).expect("cannot keep a tagging");
+                }
+                std::fs::remove_dir_all(k).ok();
+                std::fs::rename(&partial, k).expect("cannot move the kept training into place");
+                eprintln!("{}: training and tagging kept in {}", self.name, k.display());
+            }
         }
+        let train_metrics = read_json(&layout.train().join("metrics.json"));
         let mut rows = Vec::new();
         for (k, (variant, method, extra)) in variants.iter().enumerate() {
             let out = dir.join(format!("variant_{k}"));
@@ -259,6 +291,7 @@ fn main() {
             fid: &fid,
             exposure: false,
             fit_exposure: jittered,
+            reuse: None,
         };
         for r in run.variants(&dir, spec.seed, &variants) {
             device = r["device"].as_str().unwrap_or("?").to_string();
@@ -492,4 +525,19 @@ fn exposure_table(args: &[String], rows: &[Value], jitter: &str, iters: &str, de
         &json!({ "device": device, "jitter": jitter, "rows": rows }),
     );
     common::update_results(args, "removal-exposure-table", &md);
+}
+
+/// Copies the folder `from` (files and subfolders) to `to`, which is created.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap_or_else(|e| panic!("cannot create {}: {e}", to.display()));
+    for entry in std::fs::read_dir(from).unwrap_or_else(|e| panic!("cannot read {}: {e}", from.display())) {
+        let entry = entry.expect("cannot read a folder entry");
+        let target = to.join(entry.file_name());
+        if entry.file_type().expect("cannot stat a folder entry").is_dir() {
+            copy_tree(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), &target)
+                .unwrap_or_else(|e| panic!("cannot copy {} to {}: {e}", entry.path().display(), target.display()));
+        }
+    }
 }

@@ -2,7 +2,10 @@
 //! captures (`cogeo synth --composite-into`), whose original photos are the exact ground truth.
 //! Each capture is first trained without objects (cached under target/bench-cache, since only
 //! its depth is needed); the composited capture is then trained, tagged and removed like a synth
-//! room.
+//! room. With `--reuse-composites` the composite's training and tagging are kept in the capture's
+//! cache and reused by later runs, so that two runs of different code compare on the same trained
+//! scene (between trainings the rows move by tenths of a dB up to 2 dB). Delete target/bench-cache
+//! after changing training, tagging or compositing.
 
 use crate::common::{cogeo, s};
 use std::path::{Path, PathBuf};
@@ -67,7 +70,8 @@ pub fn shared_capture(name: &str) -> PathBuf {
 
 /// Makes the benchmark dataset of `spec` in `data`: the capture trained without objects for
 /// `iters` iterations at `downscale` (cached), then the objects composited into its photos.
-pub fn prepare(spec: &RealSpec, downscale: u32, iters: &str, data: &Path) {
+/// Returns the capture's cache folder.
+pub fn prepare(spec: &RealSpec, downscale: u32, iters: &str, data: &Path) -> PathBuf {
     let capture = shared_capture(spec.capture);
     assert!(capture.is_dir(), "{}: the shared capture is missing", capture.display());
     let p = |x: &Path| x.to_string_lossy().into_owned();
@@ -122,6 +126,7 @@ pub fn prepare(spec: &RealSpec, downscale: u32, iters: &str, data: &Path) {
         "--out",
         &p(data),
     ]));
+    cache
 }
 
 /// Runs every real scene in `specs` with `variants` and writes their table (`removal-real-table`
@@ -149,6 +154,8 @@ pub fn run(
     let mut sheet_rows = Vec::new();
     // --real-table-only: no scene is run; the table and sheet are rebuilt from the stored rows
     let table_only = args.iter().any(|a| a == "--real-table-only");
+    // --reuse-composites: keep each composite's training and tagging, and reuse them on later runs
+    let reuse_composites = args.iter().any(|a| a == "--reuse-composites");
     for spec in specs.iter().filter(|_| !table_only) {
         eprintln!(
             "real scene {} ({} object(s) in {}, removing {})",
@@ -156,7 +163,10 @@ pub fn run(
         );
         let dir = root.join(spec.name);
         let data = dir.join("data");
-        prepare(spec, downscale_of(spec.capture), &iters, &data);
+        let capture_cache = prepare(spec, downscale_of(spec.capture), &iters, &data);
+        // kept inside the capture's cache: a retrained capture composites differently, and its
+        // new cache folder starts without them
+        let reuse = reuse_composites.then(|| capture_cache.join("composites").join(spec.name));
         let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
         let truth = cogeo::synth::ground_truth(&data, &labels);
         assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);
@@ -170,6 +180,7 @@ pub fn run(
             fid,
             exposure: false,
             fit_exposure: false,
+            reuse,
         };
         rows.extend(run.variants(&dir, spec.seed, variants));
         let at = |name: &str| variants.iter().position(|v| v.0 == name).map(|k| dir.join(format!("variant_{k}")));
