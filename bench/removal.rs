@@ -152,7 +152,8 @@ impl Training<'_> {
                 std::fs::remove_dir_all(&partial).ok();
                 copy_tree(&layout.train(), &partial.join("train"));
                 for m in &methods {
-                    std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m))).expect("cannot keep a tagging");
+                    std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
+                        .expect("cannot keep a tagging");
                 }
                 std::fs::remove_dir_all(k).ok();
                 std::fs::rename(&partial, k).expect("cannot move the kept training into place");
