@@ -45,8 +45,10 @@ fn main() {
             if let Some(dir) = &write_dir {
                 write_camera(&cam, settings.near, &dir.join(format!("camera-{w}x{h}.json")));
             }
-            // Warm-up: allocations and pipeline caches, and a second of load so that a GPU's clocks
-            // have left idle (an H100 read 345 MHz idle; one warm-up frame timed 2-5x slow there).
+            // Warm-up: allocations and pipeline caches, and at least a second of frames so that a
+            // GPU has left its idle clock (an H100 read 345 MHz idle). On the H100 it changed
+            // nothing measurable: this path's passes stay 2-5x their times inside a training
+            // iteration, an open question (bench/RESULTS.md, NVIDIA section).
             let warm = Instant::now();
             while warm.elapsed().as_secs_f64() < 1.0 {
                 raster.render(&buffers, &cam, &settings).unwrap();
