@@ -66,8 +66,18 @@ pub fn synthetic_scene(n: usize, degree: u32, seed: u64) -> GaussianScene {
     s
 }
 
+/// Where a bench writes `name` (JSON, tables, images): bench/results, or with `--no-results` (a
+/// trial run, which must leave the committed results as they are) a folder under the system's
+/// temporary directory.
 pub fn results_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench").join("results").join(name)
+    let folder = if args().iter().any(|a| a == "--no-results") {
+        let trial = std::env::temp_dir().join("cogeo-bench-trial-results");
+        std::fs::create_dir_all(&trial).unwrap_or_else(|e| panic!("cannot create {}: {e}", trial.display()));
+        trial
+    } else {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench").join("results")
+    };
+    folder.join(name)
 }
 
 /// File-name-safe short name of the device ("llvmpipe", "nvidia-h100", ...).

@@ -259,9 +259,7 @@ fn main() {
         }
         None => FAMILIES.to_vec(),
     };
-    let out = common::arg(&args, "--out")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench/results/fuzz.json"));
+    let out = common::arg(&args, "--out").map(PathBuf::from).unwrap_or_else(|| common::results_path("fuzz.json"));
     eprintln!(
         "fuzzing {} families, {execs} inputs each, {jobs} at a time (salt {salt}, bound {bound_ms} ms)",
         families.len()
