@@ -1,13 +1,11 @@
 #!/usr/bin/env bash
 # The GPU checks of ../shared/docs/gpu.md in one command, for a lent NVIDIA machine (device tool).
-# Prepared here (see bench/JOURNAL.md, 2026-11-26): .gpu/bin.tar.xz holds the stripped `cogeo`
-# binary, every test binary and the render/sort/train benches, built with
-# CARGO_TARGET_DIR=/tmp/tgt3 from /work/main (the paths the test binaries were compiled with);
-# .gpu/shared holds the part of ../shared the tests read (data/splats, data/statue/sparse, one
-# statue photo, models/lpips_alex_v0.1.onnx); .gl the .debs of libvulkan1 AND libglvnd0 libegl1
-# libgl1 libglx0 libgles2 libopengl0 (NVIDIA's ICD needs glvnd: with the loader alone no driver is
-# found); .whl gsplat's wheel. Run there as:  bash scripts/gpu_checks.sh   (carry .gl .gpu .whl)
-# Writes under $OUT: devices.txt, bench.log, tests.log, gsplat.log, gsplat_build.log, results.tar.
+# Prepare here with scripts/gpu_pack.sh (binaries, the shared data the tests read, the Vulkan
+# loader and libglvnd .debs, gsplat's wheel), then run there as:  bash scripts/gpu_checks.sh
+# (carry .gl .gpu .whl). The test binaries expect the paths they were built with: the script
+# recreates /work/main (this checkout) and the target folder named in .gpu/target_dir.
+# Writes under $OUT: devices.txt, bench.log, clocks.csv (SM clock and load every 200 ms during the
+# benches), tests.log, gsplat.log, gsplat_build.log, gsplat.json, results.tar.
 set -u
 t0=$(date +%s)
 elapsed() { echo $(( $(date +%s) - t0 )); }
@@ -27,10 +25,11 @@ build=$!
 
 # The binaries expect the paths they were built with.
 tar xJf .gpu/bin.tar.xz -C /tmp
-mkdir -p /work /tmp/tgt3/release
+target=$(cat .gpu/target_dir 2>/dev/null || echo /tmp/tgt3)
+mkdir -p /work "$target/release"
 [ "$PWD" = /work/main ] || ln -sfn "$PWD" /work/main
 [ -e /work/shared ] || ln -sfn "$PWD/.gpu/shared" /work/shared
-cp /tmp/t/cogeo /tmp/tgt3/release/cogeo
+cp /tmp/t/cogeo "$target/release/cogeo"
 ort=$(python3 -c 'import onnxruntime, os, glob; print(sorted(glob.glob(os.path.dirname(onnxruntime.__file__) + "/capi/libonnxruntime.so*"))[0])' 2>/dev/null)
 [ -n "$ort" ] && export ORT_DYLIB_PATH=$ort
 
@@ -42,6 +41,9 @@ if ! /tmp/t/cogeo devices >/dev/null 2>&1; then
     exit 1
 fi
 
+# the SM clock beside the benches: is the render path's slowness (bench/RESULTS.md) a low clock?
+nvidia-smi --query-gpu=timestamp,clocks.sm,utilization.gpu --format=csv -lms 200 > "$OUT/clocks.csv" 2>&1 &
+clocks=$!
 {
     echo "== render ($(elapsed) s)"
     timeout 120 /tmp/t/bench/render --sizes 1000000,3000000 --resolutions 1920x1080 --frames 10 --no-results --write-scenes /tmp/scenes
@@ -51,6 +53,7 @@ fi
     timeout 120 /tmp/t/bench/train --sizes 1000000,3000000 --resolution 1920x1080 --iters 10 --full-sh --no-results
     echo "== benches done ($(elapsed) s)"
 } > "$OUT/bench.log" 2>&1
+kill $clocks 2>/dev/null
 grep -E "^device|GPU total|GPU [0-9.]+ ms|ms/iter|iteration|Gaussians" "$OUT/bench.log" | head -30
 
 # The whole test suite, one binary at a time; stop starting new ones past the deadline.

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Prepares, on this machine, what scripts/gpu_checks.sh needs on a lent NVIDIA machine (device
+# tool): run it here, then call the device with carry [".gl", ".gpu", ".whl"] and the command
+# `bash scripts/gpu_checks.sh`. Needs network access here (apt and pip downloads).
+#   .gpu/bin.tar.xz  stripped cogeo, every test binary, the render/sort/train benches
+#   .gpu/target_dir  the CARGO_TARGET_DIR they were built in (the test binaries find cogeo there)
+#   .gpu/shared/     the part of ../shared the tests read (the statue's photos do not fit: 64 MiB)
+#   .gl/*.deb        the Vulkan loader and libglvnd (NVIDIA's ICD needs both)
+#   .whl/            gsplat's wheel (its CUDA kernels compile there on first use, 65-92 s)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+for d in .gl .gpu .whl; do grep -qx "/$d/" .git/info/exclude 2>/dev/null || echo "/$d/" >> .git/info/exclude; done
+target=${CARGO_TARGET_DIR:-$PWD/target}
+export CARGO_TARGET_DIR=$target
+
+executables() { python3 -c '
+import json, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m.get("executable"):
+        print(m["target"]["kind"][0], m["target"]["name"], m["executable"])'; }
+
+cargo build --release
+rm -rf .gpu && mkdir -p .gpu/pack/t/tests .gpu/pack/t/bench
+cp "$target/release/cogeo" .gpu/pack/t/
+cargo test --release --no-run --message-format=json 2>/dev/null | executables | while read -r kind name exe; do
+    cp "$exe" ".gpu/pack/t/tests/$name-$(basename "$exe" | sed 's/.*-//')"
+done
+cargo bench --no-run --message-format=json 2>/dev/null | executables | while read -r kind name exe; do
+    case $name in render|sort|train) cp "$exe" ".gpu/pack/t/bench/$name" ;; esac
+done
+strip .gpu/pack/t/cogeo .gpu/pack/t/tests/* .gpu/pack/t/bench/*
+(cd .gpu/pack && tar cf - t | xz -T0 -6 > ../bin.tar.xz)
+rm -rf .gpu/pack
+echo "$target" > .gpu/target_dir
+
+S=.gpu/shared
+mkdir -p $S/data/splats $S/data/statue/images_2 $S/models
+cp ../shared/data/splats/guitar.ply $S/data/splats/
+cp -r ../shared/data/statue/sparse $S/data/statue/
+cp ../shared/data/statue/images_2/IMG_2707.png $S/data/statue/images_2/
+cp ../shared/models/lpips_alex_v0.1.onnx $S/models/
+
+rm -rf .gl && mkdir -p .gl /tmp/amd64/partial
+o=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64)
+apt-get "${o[@]}" update > /dev/null
+(cd .gl && apt-get "${o[@]}" download libvulkan1 libglvnd0 libegl1 libgl1 libglx0 libgles2 libopengl0 2>&1 | grep -v unsandboxed || true)
+
+rm -rf .whl && mkdir -p .whl
+python3 -m pip download -q --no-deps --only-binary=:all: --python-version 3.12 --implementation cp \
+    --platform manylinux_2_28_x86_64 --platform manylinux2014_x86_64 --platform any -d .whl gsplat==1.5.3
+
+du -sh .gpu .gl .whl
+echo "ready: carry .gl .gpu .whl; the working tree and these together must stay under 64 MiB"
