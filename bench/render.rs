@@ -119,5 +119,5 @@ fn write_camera(cam: &Camera, near: f32, path: &std::path::Path) {
         "width": cam.width, "height": cam.height, "fx": cam.fx, "fy": cam.fy, "cx": cam.cx, "cy": cam.cy,
         "viewmat": view, "near": near,
     });
-    std::fs::write(path, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+    common::write_json(path, &json);
 }
