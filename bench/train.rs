@@ -36,7 +36,8 @@ fn main() {
     let trained = common::arg(&args, "--scene").map(|ply| {
         let data = common::arg(&args, "--data").expect("--scene needs --data (the scene's dataset)");
         let scene = cogeo::scene::ply::read_ply(std::path::Path::new(&ply)).expect("cannot read --scene");
-        let data = cogeo::scene::dataset::load(std::path::Path::new(&data), "images", 1).expect("cannot load --data");
+        let images = common::arg(&args, "--images").unwrap_or_else(|| "images".into());
+        let data = cogeo::scene::dataset::load(std::path::Path::new(&data), &images, 1).expect("cannot load --data");
         (scene, data)
     });
     let is_trained = trained.is_some();
