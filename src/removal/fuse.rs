@@ -49,6 +49,8 @@ pub struct Patched {
     /// Per view (`Fill::Depth`), the pixels whose back-projected point was kept: the surface
     /// points the view owns in the patch. Empty for the nearest-copy fill.
     pub owned: Vec<Vec<bool>>,
+    /// The new Gaussians: the last `added` of `scene`.
+    pub added: usize,
 }
 
 /// Stage 4: adds new Gaussians behind the removed objects to `background`. `Fill::Depth`
@@ -70,7 +72,7 @@ pub fn patch_scene(
         let patch = nearest_copies(&scene, removed_means);
         scene.append(&patch)?;
         let report = serde_json::json!({ "fill": "nearest-copy", "patch_gaussians": patch.len() });
-        return Ok(Patched { scene, report, pruned: 0, prune: None, owned: Vec::new() });
+        return Ok(Patched { scene, report, pruned: 0, prune: None, owned: Vec::new(), added: patch.len() });
     }
     let (points, stats, owned) = fuse_points(views, cfg);
     let patch = patch_gaussians(&points, scene.sh_degree, cfg.opacity);
@@ -89,7 +91,7 @@ pub fn patch_scene(
     }
     scene.append(&patch)?;
     let report = serde_json::json!({ "stats": stats, "patch_gaussians": patch.len() });
-    Ok(Patched { scene, report, pruned, prune: prune_used, owned })
+    Ok(Patched { scene, report, pruned, prune: prune_used, owned, added: patch.len() })
 }
 
 /// One edited view's completion.

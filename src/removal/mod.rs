@@ -36,6 +36,7 @@ pub use fuse::Fill;
 pub use select::{hole_mask, select};
 
 use crate::gpu::Gpu;
+use crate::image_ops::crop;
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
 use complete::source_views::SourceView;
@@ -207,7 +208,8 @@ pub fn remove(
             let consensus =
                 (!patch.owned.is_empty()).then(|| consensus_weights(&mut views, &patch.owned, opts.fuse.tolerance));
             // 5. refinement, the holes weighing more than the rest of each view
-            let (refined, report) = refine_views(gpu, &result, &views, cameras, consensus, extent, opts, progress)?;
+            let (refined, report) =
+                refine_views(gpu, &result, &views, cameras, consensus, patch.added, extent, opts, progress)?;
             (result, refine_report) = (refined, Some(report));
             clock.lap("refine");
         }
@@ -363,7 +365,9 @@ fn consensus_weights(views: &mut [EditedView], owned: &[Vec<bool>], tolerance: f
 }
 
 /// Stage 5: refines `scene` against the completed views (`cameras`, theirs), each view's hole
-/// weighing `hole_weight` times the rest, times its `consensus` weights where there are some.
+/// weighing `hole_weight` times the rest, times its `consensus` weights where there are some;
+/// each view over its window around the hole and the `patch_gaussians` (the last of `scene`)
+/// unless `whole_views` is set.
 #[allow(clippy::too_many_arguments)]
 fn refine_views(
     gpu: &Gpu,
@@ -371,15 +375,29 @@ fn refine_views(
     views: &[EditedView],
     cameras: &[Camera],
     consensus: Option<Vec<Vec<f32>>>,
+    patch_gaussians: usize,
     extent: f64,
     opts: &RemoveOptions,
     progress: Progress,
 ) -> Result<(GaussianScene, RefineReport)> {
     let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
-    let masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
-    let targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
+    let mut masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
+    let mut targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
+    let mut cameras = cameras.to_vec();
+    if !opts.refine.whole_views {
+        // each view over its window (`refine::refine_window`); a view that sees neither its
+        // hole nor the patch keeps its whole frame, the anchor of everything it sees
+        let patch = &scene.means[scene.len() - patch_gaussians..];
+        for (i, cam) in cameras.iter_mut().enumerate() {
+            let Some(win) = refine::refine_window(cam, holes[i], patch, opts.refine.margin) else { continue };
+            let (w, h) = (cam.width as usize, cam.height as usize);
+            targets[i] = crop(&targets[i], w, h, 3, win);
+            masks[i] = crop(&masks[i], w, h, 1, win);
+            *cam = refine::window_camera(cam, win);
+        }
+    }
     let total = opts.refine.iters as usize;
-    refine::refine(gpu, scene, cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
+    refine::refine(gpu, scene, &cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
         progress("refine", it as usize, total)
     })
 }

@@ -17,6 +17,12 @@ pub struct Camera {
     pub rotation: [[f64; 3]; 3],
     /// World-to-camera translation.
     pub translation: [f64; 3],
+    /// Where this camera sees a window of a larger view (the refinement's windows): that view's
+    /// size. The focal lengths and principal point are the view's, moved by the window's corner,
+    /// and the projection clamps its perspective Jacobian to the whole view's field of view
+    /// (conventions.md), so the window's pixels render exactly as in the whole view. None: the
+    /// camera is a whole view.
+    pub whole_view: Option<(u32, u32)>,
 }
 
 pub use crate::io::MAX_IMAGE_SIDE;
@@ -114,16 +120,27 @@ impl Camera {
         Some((y as usize * self.width as usize + x as usize, z))
     }
 
-    /// tan of half the field of view along x and y.
+    /// tan of half the field of view along x and y (of the whole view, for a window of one).
     pub fn tan_half_fov(&self) -> (f64, f64) {
-        (0.5 * self.width as f64 / self.fx, 0.5 * self.height as f64 / self.fy)
+        let (w, h) = self.whole_view.unwrap_or((self.width, self.height));
+        (0.5 * w as f64 / self.fx, 0.5 * h as f64 / self.fy)
     }
 
     /// The same camera for an image resized to width x height (intrinsics scaled per axis).
     pub fn resized(&self, width: u32, height: u32) -> Camera {
         let sx = width as f64 / self.width as f64;
         let sy = height as f64 / self.height as f64;
-        Camera { width, height, fx: self.fx * sx, fy: self.fy * sy, cx: self.cx * sx, cy: self.cy * sy, ..self.clone() }
+        let whole_view = self.whole_view.map(|(w, h)| ((w as f64 * sx).round() as u32, (h as f64 * sy).round() as u32));
+        Camera {
+            width,
+            height,
+            fx: self.fx * sx,
+            fy: self.fy * sy,
+            cx: self.cx * sx,
+            cy: self.cy * sy,
+            whole_view,
+            ..self.clone()
+        }
     }
 
     /// A camera at `eye` looking at `target` with `up` pointing roughly up in the image (-y).
@@ -164,6 +181,7 @@ impl Camera {
             cy: height as f64 / 2.0,
             rotation,
             translation,
+            whole_view: None,
         }
     }
 }
@@ -229,6 +247,7 @@ pub fn parse_cameras_json(data: &[u8], what: &str) -> Result<Vec<Camera>> {
                 cy: c.height as f64 / 2.0,
                 rotation,
                 translation,
+                whole_view: None,
             };
             camera.check(&format!("{what}: camera {:?}", camera.name))?;
             Ok(camera)

@@ -336,6 +336,7 @@ pub fn parse_colmap(
                 cy: k.k.cy,
                 rotation: rotation_from_qvec(im.qvec),
                 translation: im.tvec,
+                whole_view: None,
             };
             camera.check(&format!("{what}: image {:?}", im.name))?;
             Ok((camera, k.k.lens))

@@ -145,8 +145,18 @@ pub fn parse_transforms(json: &Value, dir: &Path, what: &str) -> Result<ColmapMo
         let axes = axes.map(|a| if scale > 0.0 { a / scale } else { a });
         let c2w_rotation = [0, 1, 2].map(|row| [axes[0][row], axes[1][row], axes[2][row]]);
         let (rotation, translation) = pose_from_camera_to_world(c2w_rotation, c2w.w_axis.truncate().to_array());
-        let camera =
-            Camera { name, width: w, height: h, fx: k.fx, fy: k.fy, cx: k.cx, cy: k.cy, rotation, translation };
+        let camera = Camera {
+            name,
+            width: w,
+            height: h,
+            fx: k.fx,
+            fy: k.fy,
+            cx: k.cx,
+            cy: k.cy,
+            rotation,
+            translation,
+            whole_view: None,
+        };
         camera.check(&at)?;
         views.push((camera, k.lens));
     }

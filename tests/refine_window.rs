@@ -1,0 +1,63 @@
+//! The refinement's window (removal/refine.rs): a view refined over part of its image must see
+//! those pixels exactly as the whole view does, and the window must hold the view's hole and
+//! every patch Gaussian it sees.
+
+mod common;
+
+use cogeo::image_ops::Rect;
+use cogeo::removal::refine::{refine_window, window_camera};
+use cogeo::render::{RenderSettings, SceneRenderer};
+use common::{random_scene, test_camera, SceneMix};
+
+/// The window's render equals the whole view's render cropped to it, pixel for pixel (up to the
+/// float rounding of the moved principal point).
+#[test]
+fn a_window_camera_renders_the_windows_pixels_as_the_whole_view_does() {
+    let gpu = common::gpu();
+    let scene = random_scene(11, 1, SceneMix::default());
+    let mut camera = test_camera(96, 72);
+    camera.cx += 0.37; // a principal point off the pixel grid, as real cameras have
+    let window = Rect { x0: 13, y0: 9, x1: 70, y1: 50 };
+    let mut renderer = SceneRenderer::new(&gpu, &scene, None).unwrap();
+    let settings = RenderSettings { background: [0.2, 0.4, 0.6], ..Default::default() };
+    let whole = renderer.render(&camera, &settings).unwrap();
+    let part = renderer.render(&window_camera(&camera, window), &settings).unwrap();
+    assert_eq!((part.width, part.height), (57, 41));
+    let (w, h) = (96usize, 72usize);
+    let expected_rgb = cogeo::image_ops::crop(&whole.rgb, w, h, 3, window);
+    let expected_alpha = cogeo::image_ops::crop(&whole.alpha, w, h, 1, window);
+    let worst = |a: &[f32], b: &[f32]| a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+    let covered = expected_alpha.iter().filter(|&&a| a > 0.5).count();
+    assert!(covered > 500, "the window must show the scene, not background: {covered} covered pixels");
+    assert!(worst(&part.rgb, &expected_rgb) < 2e-4, "rgb differs by {}", worst(&part.rgb, &expected_rgb));
+    assert!(worst(&part.alpha, &expected_alpha) < 2e-4, "alpha differs by {}", worst(&part.alpha, &expected_alpha));
+}
+
+/// The window is the bounding box of the hole and of the patch centres that land in the image,
+/// grown by the margin and clamped to the image; a centre behind the camera or outside the
+/// image does not count, and a view that sees neither has no window.
+#[test]
+fn the_window_holds_the_hole_and_the_patch_the_view_sees() {
+    let camera = test_camera(80, 60);
+    let (w, h) = (80usize, 60usize);
+    let hole: Vec<bool> = (0..w * h).map(|i| (30..40).contains(&(i % w)) && (20..26).contains(&(i / w))).collect();
+    // a patch centre 4 units in front of the camera that lands at a known pixel
+    let at = |x: usize, y: usize| camera.pixel_point(x, y, 4.0).map(|v| v as f32);
+    let behind = {
+        let c = camera.pixel_point(10, 10, 4.0);
+        let eye = camera.pixel_point(10, 10, 0.0);
+        [0, 1, 2].map(|k| (2.0 * eye[k] - c[k]) as f32) // mirrored through the eye: behind it
+    };
+    let far_left = camera.pixel_point(0, 0, 4.0);
+    let outside = [0, 1, 2].map(|k| (far_left[k] + 10.0 * (far_left[k] - camera.pixel_point(1, 0, 4.0)[k])) as f32);
+    assert!(camera.project_to_image(outside.map(f64::from)).is_none());
+
+    let r = refine_window(&camera, &hole, &[], 5).unwrap();
+    assert_eq!((r.x0, r.y0, r.x1, r.y1), (25, 15, 45, 31));
+    let patch = [at(50, 40), behind, outside];
+    let r = refine_window(&camera, &hole, &patch, 5).unwrap();
+    assert_eq!((r.x0, r.y0, r.x1, r.y1), (25, 15, 56, 46));
+    let r = refine_window(&camera, &hole, &[at(2, 57)], 5).unwrap();
+    assert_eq!((r.x0, r.y0, r.x1, r.y1), (0, 15, 45, 60), "clamped to the image");
+    assert!(refine_window(&camera, &vec![false; w * h], &[behind, outside], 5).is_none());
+}
