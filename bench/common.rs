@@ -102,9 +102,15 @@ pub fn write_json(path: &std::path::Path, value: &serde_json::Value) {
     println!("wrote {}", path.display());
 }
 
+/// The median of `v` (of an even count, the mean of the middle two).
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap());
-    v[v.len() / 2]
+    let n = v.len();
+    if n % 2 == 0 {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    } else {
+        v[n / 2]
+    }
 }
 
 /// Runs the `cogeo` binary of this build with `args`, panics with its stderr when it fails, and
