@@ -38,8 +38,8 @@ layout(push_constant) uniform Push {
 // The target's patch, read once per target and compared with every candidate source: its colors
 // in (dy, dx, channel) order and a bit per pixel that counts (inside the image and on the
 // target's surface: a kept object in front of the hole must not pull the match toward its own
-// edge). Reading it once halves the scattered reads of a candidate, which are where lavapipe's
-// time goes; the sums run in the same order as reading it per candidate did.
+// edge). Reading it once halves a candidate's scattered reads (the fill ran about 5 % faster on
+// lavapipe; the source patch's reads remain); the sums run in the same order as before.
 const int SIDE = 2 * RADIUS + 1;
 struct TargetPatch {
     float rgb[3 * SIDE * SIDE];
