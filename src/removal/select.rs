@@ -56,8 +56,8 @@ pub struct ViewRenderer {
     features: bool,
 }
 
-/// One render of a view (planar RGB, alpha, expected depth; the marked Gaussians' weight when
-/// asked for).
+/// One render of a view (planar RGB, alpha, expected depth; the marked Gaussians' weight, zero
+/// where none were marked).
 pub struct Rendered {
     pub rgb: Vec<f32>,
     pub alpha: Vec<f32>,
@@ -75,7 +75,8 @@ impl ViewRenderer {
     pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
         let settings = RenderSettings { background, features: self.features, ..Default::default() };
         let o = self.renderer.render(camera, &settings)?;
-        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight: o.features })
+        let weight = if self.features { o.features } else { vec![0.0; o.alpha.len()] };
+        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight })
     }
 }
 
@@ -153,7 +154,10 @@ pub fn hole_masks(
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<MaskedView>> {
     let mut original = ViewRenderer::new(gpu, scene, Some(&selection.removed))?;
-    let mut remaining = ViewRenderer::new(gpu, &selection.background, Some(&selection.kept_objects))?;
+    // a scene without kept objects needs no weight of theirs: the feature blend was 40 % of a
+    // render on the statue (`Rendered::weight` is then zero everywhere)
+    let kept = selection.kept_objects.iter().any(|&k| k).then_some(&selection.kept_objects[..]);
+    let mut remaining = ViewRenderer::new(gpu, &selection.background, kept)?;
     let mut views = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
