@@ -106,7 +106,7 @@ pub fn write_json(path: &std::path::Path, value: &serde_json::Value) {
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.partial_cmp(b).unwrap());
     let n = v.len();
-    if n % 2 == 0 {
+    if n.is_multiple_of(2) {
         0.5 * (v[n / 2 - 1] + v[n / 2])
     } else {
         v[n / 2]
