@@ -116,14 +116,45 @@ pub fn median(mut v: Vec<f64>) -> f64 {
 /// Runs the `cogeo` binary of this build with `args`, panics with its stderr when it fails, and
 /// returns the wall time in seconds (also printed with the command line).
 pub fn cogeo(args: &[String]) -> f64 {
+    run_binary(std::path::Path::new(env!("CARGO_BIN_EXE_cogeo")), args)
+}
+
+/// `cogeo` for any cogeo binary `exe` (an older build to compare with).
+pub fn run_binary(exe: &std::path::Path, args: &[String]) -> f64 {
     let t = std::time::Instant::now();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_cogeo")).args(args).output().expect("cannot run cogeo");
+    let out = std::process::Command::new(exe)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {}: {e}", exe.display()));
     if !out.status.success() {
-        panic!("cogeo {} failed:\n{}", args.join(" "), String::from_utf8_lossy(&out.stderr));
+        panic!("{} {} failed:\n{}", exe.display(), args.join(" "), String::from_utf8_lossy(&out.stderr));
     }
     let seconds = t.elapsed().as_secs_f64();
-    eprintln!("  {seconds:>7.1} s  cogeo {}", args.join(" "));
+    eprintln!("  {seconds:>7.1} s  {} {}", exe.display(), args.join(" "));
     seconds
+}
+
+/// The folder under target/bench-cache where benches keep what they made for later runs.
+pub fn bench_cache() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/bench-cache")
+}
+
+/// The shared real capture `name` (../shared/data/name).
+pub fn shared_capture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
+}
+
+/// Fills the folder `dir` with `make`, which writes into the folder it is given: a sibling
+/// `<dir>.partial`, moved to `dir` only once `make` returns, so an interrupted run leaves no
+/// half-made folder for a later run to trust.
+pub fn make_folder(dir: &std::path::Path, make: impl FnOnce(&std::path::Path)) {
+    let partial = dir.with_extension("partial");
+    std::fs::remove_dir_all(&partial).ok();
+    std::fs::create_dir_all(&partial).unwrap_or_else(|e| panic!("cannot create {}: {e}", partial.display()));
+    make(&partial);
+    std::fs::remove_dir_all(dir).ok();
+    std::fs::rename(&partial, dir)
+        .unwrap_or_else(|e| panic!("cannot move {} to {}: {e}", partial.display(), dir.display()));
 }
 
 pub fn read_json(p: &std::path::Path) -> serde_json::Value {

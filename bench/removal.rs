@@ -147,16 +147,13 @@ impl Training<'_> {
                 ));
             }
             if let Some(k) = &kept {
-                // written aside, then moved: an interrupted run leaves no half-kept training
-                let partial = k.with_extension("partial");
-                std::fs::remove_dir_all(&partial).ok();
-                copy_tree(&layout.train(), &partial.join("train"));
-                for m in &methods {
-                    std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
-                        .expect("cannot keep a tagging");
-                }
-                std::fs::remove_dir_all(k).ok();
-                std::fs::rename(&partial, k).expect("cannot move the kept training into place");
+                common::make_folder(k, |partial| {
+                    copy_tree(&layout.train(), &partial.join("train"));
+                    for m in &methods {
+                        std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
+                            .expect("cannot keep a tagging");
+                    }
+                });
                 eprintln!("{}: training and tagging kept in {}", self.name, k.display());
             }
         }

@@ -63,45 +63,36 @@ pub const REAL_SCENES: [RealSpec; 4] = [
     },
 ];
 
-/// The shared real capture `name`.
-pub fn shared_capture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(name)
-}
-
 /// Makes the benchmark dataset of `spec` in `data`: the capture trained without objects for
 /// `iters` iterations at `downscale` (cached), then the objects composited into its photos.
 /// Returns the capture's cache folder.
 pub fn prepare(spec: &RealSpec, downscale: u32, iters: &str, data: &Path) -> PathBuf {
-    let capture = shared_capture(spec.capture);
+    let capture = crate::common::shared_capture(spec.capture);
     assert!(capture.is_dir(), "{}: the shared capture is missing", capture.display());
     let p = |x: &Path| x.to_string_lossy().into_owned();
-    let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target/bench-cache")
-        .join(format!("{}-{}-d{downscale}-i{iters}", spec.capture, spec.images));
+    let cache = crate::common::bench_cache().join(format!("{}-{}-d{downscale}-i{iters}", spec.capture, spec.images));
     let scene = cache.join("scene.ply");
     if !scene.is_file() {
         eprintln!("training {} without objects into {} (cached for later runs)", spec.capture, cache.display());
-        let tmp = cache.with_extension("partial");
-        std::fs::remove_dir_all(&tmp).ok();
-        cogeo(&s(&[
-            "train",
-            "--data",
-            &p(&capture),
-            "--images",
-            spec.images,
-            "--downscale",
-            &downscale.to_string(),
-            "--out",
-            &p(&tmp),
-            "--iters",
-            iters,
-            "--max-gaussians",
-            "200000",
-            "--checkpoint-every",
-            "0",
-        ]));
-        std::fs::remove_dir_all(&cache).ok();
-        std::fs::rename(&tmp, &cache).expect("cannot move the trained capture into the cache");
+        crate::common::make_folder(&cache, |tmp| {
+            cogeo(&s(&[
+                "train",
+                "--data",
+                &p(&capture),
+                "--images",
+                spec.images,
+                "--downscale",
+                &downscale.to_string(),
+                "--out",
+                &p(tmp),
+                "--iters",
+                iters,
+                "--max-gaussians",
+                "200000",
+                "--checkpoint-every",
+                "0",
+            ]));
+        });
     }
     cogeo(&s(&[
         "synth",

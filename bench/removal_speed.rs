@@ -42,7 +42,7 @@ fn main() {
     let extra: Vec<String> = common::arg(&args, "--remove-args")
         .map(|a| a.split_whitespace().map(String::from).collect())
         .unwrap_or_default();
-    let capture = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(CAPTURE);
+    let capture = common::shared_capture(CAPTURE);
     assert!(capture.is_dir(), "{}: the shared capture is missing", capture.display());
     let cache = prepare(&capture);
     let tagged = cache.join("tagged.ply");
@@ -64,7 +64,7 @@ fn main() {
             a.push(out.display().to_string());
             a.extend(extra.iter().cloned());
             eprintln!("run {} of {repeat}, {name}:", r + 1);
-            let wall = run(exe, &a);
+            let wall = common::run_binary(exe, &a);
             let report = common::read_json(&out.join("report.json"));
             runs[b].push(serde_json::json!({"wall_seconds": wall, "seconds": report["seconds"],
                 "views": report["views"].as_array().map_or(0, |v| v.len()),
@@ -112,43 +112,25 @@ fn main() {
 
 /// The trained and tagged capture, made once: target/bench-cache/statue/speed-images_2-800.
 fn prepare(capture: &Path) -> PathBuf {
-    let cache = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target/bench-cache")
-        .join(CAPTURE)
-        .join(format!("speed-{IMAGES}-{TRAIN_ITERS}"));
+    let cache = common::bench_cache().join(CAPTURE).join(format!("speed-{IMAGES}-{TRAIN_ITERS}"));
     if cache.join("tagged.ply").is_file() {
         eprintln!("reusing the trained and tagged {CAPTURE} in {}", cache.display());
         return cache;
     }
     eprintln!("training and tagging {CAPTURE} into {} (cached for later runs)", cache.display());
-    let tmp = cache.with_extension("partial");
-    std::fs::remove_dir_all(&tmp).ok();
-    std::fs::create_dir_all(&tmp).expect("cannot create the bench cache");
-    let cap = capture.display().to_string();
-    let run_dir = tmp.join("run").display().to_string();
-    let iters = TRAIN_ITERS.to_string();
-    common::cogeo(&common::s(&["train", "--data", &cap, "--images", IMAGES, "--iters", &iters, "--out", &run_dir]));
-    let scene = tmp.join("run/scene.ply").display().to_string();
-    let tagged = tmp.join("tagged.ply").display().to_string();
-    common::cogeo(&common::s(&[
-        "tag", "--scene", &scene, "--data", &cap, "--images", IMAGES, "--masks", MASKS, "--method", "vote", "--out",
-        &tagged,
-    ]));
-    std::fs::remove_dir_all(&cache).ok();
-    std::fs::rename(&tmp, &cache).expect("cannot move the tagged capture into the cache");
+    common::make_folder(&cache, |tmp| {
+        let cap = capture.display().to_string();
+        let run_dir = tmp.join("run").display().to_string();
+        let iters = TRAIN_ITERS.to_string();
+        common::cogeo(&common::s(&["train", "--data", &cap, "--images", IMAGES, "--iters", &iters, "--out", &run_dir]));
+        let scene = tmp.join("run/scene.ply").display().to_string();
+        let tagged = tmp.join("tagged.ply").display().to_string();
+        common::cogeo(&common::s(&[
+            "tag", "--scene", &scene, "--data", &cap, "--images", IMAGES, "--masks", MASKS, "--method", "vote",
+            "--out", &tagged,
+        ]));
+    });
     cache
-}
-
-/// Runs `exe` with `args`; panics with its stderr when it fails; returns its wall seconds.
-fn run(exe: &Path, args: &[String]) -> f64 {
-    let t = std::time::Instant::now();
-    let out = std::process::Command::new(exe).args(args).output().expect("cannot run cogeo");
-    if !out.status.success() {
-        panic!("{} {} failed:\n{}", exe.display(), args.join(" "), String::from_utf8_lossy(&out.stderr));
-    }
-    let seconds = t.elapsed().as_secs_f64();
-    eprintln!("  {seconds:>7.1} s  {} {}", exe.display(), args.join(" "));
-    seconds
 }
 
 /// GPU passes (median over a few frames or iterations) and the wall time of one.
