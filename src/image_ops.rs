@@ -126,17 +126,17 @@ impl Rect {
     }
 }
 
+/// The smallest rectangle holding `r` (if any) and pixel (x, y).
+pub fn including(r: Option<Rect>, x: usize, y: usize) -> Rect {
+    match r {
+        None => Rect { x0: x, y0: y, x1: x + 1, y1: y + 1 },
+        Some(r) => Rect { x0: r.x0.min(x), y0: r.y0.min(y), x1: r.x1.max(x + 1), y1: r.y1.max(y + 1) },
+    }
+}
+
 /// Bounding box of the set pixels, or None for an empty mask.
 pub fn bounding_box(mask: &[bool], w: usize) -> Option<Rect> {
-    let mut r: Option<Rect> = None;
-    for (i, _) in mask.iter().enumerate().filter(|(_, &m)| m) {
-        let (x, y) = (i % w, i / w);
-        r = Some(match r {
-            None => Rect { x0: x, y0: y, x1: x + 1, y1: y + 1 },
-            Some(r) => Rect { x0: r.x0.min(x), y0: r.y0.min(y), x1: r.x1.max(x + 1), y1: r.y1.max(y + 1) },
-        });
-    }
-    r
+    mask.iter().enumerate().filter(|(_, &m)| m).fold(None, |r, (i, _)| Some(including(r, i % w, i / w)))
 }
 
 /// Copies a rectangle out of a planar image.
