@@ -61,8 +61,17 @@ const SCENES: [SceneSpec; 3] = [
 /// perfect 2D inpainting, the ceiling of the 3D half of the pipeline.
 const PERFECT_INPAINTING: &str = "perfect inpainting (ground truth as --inpainted)";
 
+/// The diagnostic pair for inventions that disagree across views: the built-in fill's completed
+/// views of one run (seed 1, `inpainted/` of a `--no-refine` run) fed back as `--inpainted`, and
+/// the same with each view taken from one of three runs (seeds 1, 2, 3, view by view in name
+/// order), whose never-seen parts are each another invention. Held-out renders should stay as
+/// sharp with the disagreeing views (masked LPIPS no worse than with the one source).
+const ONE_SOURCE: &str = "one inpainting source (the fill of seed 1 as --inpainted)";
+const DISAGREEING: &str = "disagreeing inpaintings (seeds 1-3 view by view as --inpainted)";
+const DISAGREEING_SEEDS: [u64; 3] = [1, 2, 3];
+
 /// (name, tagging method, extra `cogeo remove` flags)
-const VARIANTS: [(&str, &str, &[&str]); 10] = [
+const VARIANTS: [(&str, &str, &[&str]); 12] = [
     ("cogeo (full)", "vote", &[]),
     ("removal only", "vote", &["--removal-only"]),
     ("harmonic fill (no texture synthesis)", "vote", &["--inpainter", "harmonic"]),
@@ -73,6 +82,8 @@ const VARIANTS: [(&str, &str, &[&str]); 10] = [
     ("nearest-copy fill (GG-style)", "vote", &["--fill", "nearest-copy"]),
     (PERFECT_INPAINTING, "vote", &[]),
     ("shared inventions (one per surface point)", "vote", &["--share-inventions"]),
+    (ONE_SOURCE, "vote", &[]),
+    (DISAGREEING, "vote", &[]),
 ];
 
 /// The variants run again on every extra training of `--retrain`: the full pipeline and the
@@ -107,6 +118,40 @@ struct Training<'a> {
 }
 
 impl Training<'_> {
+    /// A folder of completed views for `--inpainted`, view by view from the `--no-refine` runs of
+    /// the built-in fill with `seeds` (view i from seed i mod their count, in name order). The runs
+    /// are kept in `dir` for the next variant.
+    fn seed_inpaintings(&self, dir: &Path, tagged: &Path, seeds: &[u64]) -> PathBuf {
+        let capture = Capture::at(self.data);
+        let runs: Vec<PathBuf> = seeds
+            .iter()
+            .map(|seed| {
+                let out = dir.join(format!("fill_seed{seed}"));
+                if !out.join("inpainted").is_dir() {
+                    let mut a = pipeline::remove(tagged, &capture, Chosen::Labels(self.labels), &out);
+                    a.extend(s(&["--no-refine", "--seed", &seed.to_string()]));
+                    cogeo(&a);
+                }
+                out.join("inpainted")
+            })
+            .collect();
+        if let [one] = &runs[..] {
+            return one.clone();
+        }
+        let mixed =
+            dir.join(format!("inpainted_seeds_{}", seeds.iter().map(u64::to_string).collect::<Vec<_>>().join("_")));
+        std::fs::create_dir_all(&mixed).expect("cannot create the mixed inpaintings' folder");
+        let mut names: Vec<_> = std::fs::read_dir(&runs[0])
+            .expect("cannot read a fill's inpainted views")
+            .map(|e| e.expect("cannot read a folder entry").file_name())
+            .collect();
+        names.sort();
+        for (i, name) in names.iter().enumerate() {
+            std::fs::copy(runs[i % runs.len()].join(name), mixed.join(name)).expect("cannot copy an inpainted view");
+        }
+        mixed
+    }
+
     /// Trains the scene with `seed` into `dir`, tags it, runs each variant and scores it: one row per
     /// variant, with the device and the training's seed and test PSNR.
     fn variants(&self, dir: &Path, seed: u64, variants: &[(&str, &str, &[&str])]) -> Vec<Value> {
@@ -166,6 +211,10 @@ impl Training<'_> {
             a.extend(s(extra));
             if *variant == PERFECT_INPAINTING {
                 a.extend(s(&["--inpainted", &p(self.truth)]));
+            }
+            if *variant == ONE_SOURCE || *variant == DISAGREEING {
+                let seeds = if *variant == ONE_SOURCE { &DISAGREEING_SEEDS[..1] } else { &DISAGREEING_SEEDS[..] };
+                a.extend(s(&["--inpainted", &p(&self.seed_inpaintings(dir, &tagged, seeds))]));
             }
             if self.exposure {
                 a.extend(s(&["--exposure", &p(&layout.exposure())]));

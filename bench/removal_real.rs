@@ -264,9 +264,10 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &st
     }
     md += "\nThe acceptance yardsticks per scene (full pipeline): beats removal only, harmonic and nearest-copy on \
            masked PSNR and LPIPS; outside minus seen-elsewhere PSNR (at most 2 dB); never-seen LPIPS over the \
-           harmonic fill's (at most 0.7); outside minus masked PSNR with perfect inpaintings (at most 1.5 dB):\n\n\
-           | scene | beats the three (PSNR / LPIPS) | seen-elsewhere gap dB | never-seen LPIPS ratio | perfect-inpainting gap dB |\n\
-           |---|---|---:|---:|---:|\n";
+           harmonic fill's (at most 0.7); outside minus masked PSNR with perfect inpaintings (at most 1.5 dB); masked \
+           LPIPS with disagreeing inpaintings over that with one source (at most 1):\n\n\
+           | scene | beats the three (PSNR / LPIPS) | seen-elsewhere gap dB | never-seen LPIPS ratio | perfect-inpainting gap dB | disagreeing LPIPS ratio |\n\
+           |---|---|---:|---:|---:|---:|\n";
     for spec in specs {
         let get = |variant: &str| {
             rows.iter().find(|r| r["scene"] == spec.name && r["variant"] == variant).map(|r| &r["metrics"])
@@ -303,15 +304,18 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &st
             .map(|(a, b)| a / b);
         let perfect = get(crate::PERFECT_INPAINTING);
         let ceiling = f(perfect, &["outside", "psnr"]).zip(f(perfect, &["mask", "psnr"])).map(|(a, b)| a - b);
+        let lpips = |variant: &str| f(get(variant), &["lpips", "mask"]);
+        let disagreeing = lpips(crate::DISAGREEING).zip(lpips(crate::ONE_SOURCE)).map(|(a, b)| a / b);
         let show = |v: Option<f64>, d: usize| num(&serde_json::json!(v), d);
         md += &format!(
-            "| {} | {} / {} | {} | {} | {} |\n",
+            "| {} | {} / {} | {} | {} | {} | {} |\n",
             spec.name,
             beats(&["mask", "psnr"], true),
             beats(&["lpips", "mask"], false),
             show(gap, 2),
             show(ratio, 2),
-            show(ceiling, 2)
+            show(ceiling, 2),
+            show(disagreeing, 2)
         );
     }
     md
