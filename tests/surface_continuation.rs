@@ -7,7 +7,9 @@
 
 mod common;
 
+use cogeo::removal::complete::source_views::SourceView;
 use cogeo::removal::complete::{Completer, CompletionConfig, ViewInputs};
+use cogeo::scene::exposure::ColorAffine;
 use cogeo::scene::Camera;
 
 type V3 = [f64; 3];
@@ -86,7 +88,7 @@ fn color(s: Surface, p: V3) -> [f32; 3] {
 /// hole is continued exactly.
 #[test]
 fn the_bench_top_continues_under_a_removed_box_and_the_hedge_does_not() {
-    bench_top_continues(1.2, 0.95, 0.02);
+    bench_top_continues(1.2, 0.95, 0.02, false);
 }
 
 /// The box stands on the bench's end (the real capture): the top runs into the hole from
@@ -96,13 +98,22 @@ fn the_bench_top_continues_under_a_removed_box_and_the_hedge_does_not() {
 /// texture and 60 % the hedge's.)
 #[test]
 fn a_bench_top_entering_from_one_side_is_continued_not_covered_by_the_hedge() {
-    bench_top_continues(0.45, 0.75, 0.1);
+    bench_top_continues(0.45, 0.75, 0.1, false);
+}
+
+/// The same when the color transfer follows the completion: the exemplar then leaves its texture
+/// to the transfer's fill of what no photo gives (here the view's own photo is the only source, so
+/// that is the whole hole), which must continue the bench top as the completion's own fill does.
+#[test]
+fn the_texture_left_to_the_color_transfer_continues_the_bench_top_too() {
+    bench_top_continues(0.45, 0.75, 0.1, true);
 }
 
 /// Removes the box from the bench ending at x = `bench_end`; at least `top_share` of the hole
 /// pixels whose true surface is the bench top must be completed at its depth (within 3 %) and
-/// with its texture, at most `hedge_share` with the hedge's.
-fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64) {
+/// with its texture, at most `hedge_share` with the hedge's. With `transfer_follows` the view is
+/// completed for a color transfer, which then synthesizes the texture.
+fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfer_follows: bool) {
     let gpu = common::gpu();
     let (w, h) = (160usize, 120usize);
     let cam = Camera::look_at("bench", w as u32, h as u32, 50.0, [0.9, -3.4, 1.9], [0.3, 0.4, 0.5], [0.0, 0.0, 1.0]);
@@ -164,7 +175,25 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64) {
         fill: &hole,
         hole: &hole,
     };
-    let done = completer.complete(&inputs, 0).unwrap();
+    let done = if transfer_follows {
+        let mut done = completer.complete_views(&[inputs], true, &mut |_, _| {}).unwrap();
+        assert!(done[0].texture_pending, "the exemplar's texture waits for the transfer");
+        let opaque = vec![1.0f32; w * h];
+        let own = SourceView {
+            camera: &cam,
+            photo: &rgb,
+            hole: &hole,
+            depth: &depth,
+            alpha: &opaque,
+            photo_colors: ColorAffine::IDENTITY,
+        };
+        let cameras = std::slice::from_ref(&cam);
+        completer.transfer_colors(cameras, &[own], &[&hole], &[&hole], &mut done, &mut |_, _| {}).unwrap();
+        assert!(!done[0].texture_pending, "the transfer synthesized the texture");
+        done.remove(0)
+    } else {
+        completer.complete(&inputs, 0).unwrap()
+    };
     // per pixel, which surface's texture the fill looks like: the nearest of the surfaces' colors
     // at the pixel's true point (hedge and bench differ by > 0.4 in every channel)
     let looks_like = |p: usize| {

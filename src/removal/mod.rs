@@ -185,7 +185,7 @@ pub fn remove(
     let mut refine_report = None;
     if opts.stages.complete {
         // 3. completion
-        complete_views(&mut views, completer, progress)?;
+        complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
         clock.lap("complete");
         // 3b. the hole depth the captured photos agree on, then 3c. colors from the views that
         // saw the completed surface
@@ -258,9 +258,14 @@ fn check_inputs(
 }
 
 /// Stage 3 over every view.
-fn complete_views(views: &mut [EditedView], completer: &mut Completer, progress: Progress) -> Result<()> {
+fn complete_views(
+    views: &mut [EditedView],
+    completer: &mut Completer,
+    transfer_follows: bool,
+    progress: Progress,
+) -> Result<()> {
     let inputs: Vec<ViewInputs> = views.iter().map(|v| v.completion_inputs()).collect();
-    let completed = completer.complete_views(&inputs, &mut |d, t| progress("complete", d, t))?;
+    let completed = completer.complete_views(&inputs, transfer_follows, &mut |d, t| progress("complete", d, t))?;
     drop(inputs);
     for (v, k) in views.iter_mut().zip(completed) {
         v.set_completed(k);

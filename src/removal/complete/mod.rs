@@ -184,6 +184,9 @@ pub struct Completed {
     pub space: Option<PriorSpace>,
     pub fit_pixels: usize,
     pub residual: f64,
+    /// The exemplar's texture is still owed: `rgb` holds the surface-wise harmonic fill, and the
+    /// color transfer synthesizes the texture of whatever it does not find in the photos.
+    pub texture_pending: bool,
 }
 
 impl Completer {
@@ -220,14 +223,18 @@ impl Completer {
     }
 
     /// Stage 3: completes every edited view (view i gets index i, which seeds its diffusion noise).
+    /// With `transfer_follows` (the color transfer runs next) the built-in exemplar leaves its
+    /// texture to the transfer's own fill of what the photos do not give: a first fill of the whole
+    /// hole would be overwritten there, pixel for pixel (`Completed::texture_pending`).
     pub fn complete_views(
         &mut self,
         views: &[ViewInputs],
+        transfer_follows: bool,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Vec<Completed>> {
         let mut out = Vec::with_capacity(views.len());
         for (i, v) in views.iter().enumerate() {
-            out.push(self.complete(v, i)?);
+            out.push(self.complete_view(v, i, transfer_follows)?);
             progress(i + 1, views.len());
         }
         Ok(out)
@@ -305,15 +312,18 @@ impl Completer {
                     }
                 }
             }
-            if known.iter().any(|&k| k) {
-                let rest: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !known[p]).collect();
+            if known.iter().any(|&k| k) || c.texture_pending {
+                // a pending texture covers the completion's whole fill (its see-through pixels too)
+                let fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || (c.texture_pending && c.fill[p])).collect();
+                let rest: Vec<bool> = (0..w * h).map(|p| fill[p] && !known[p]).collect();
                 // captured and shared colors are sources now; the rest of the hole's render still is not
-                let found_or_fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || known[p]).collect();
+                let found_or_fill: Vec<bool> = (0..w * h).map(|p| fill[p] || known[p]).collect();
                 let avoid = leftover(holes[i], &found_or_fill);
                 let k = Intrinsics::from(&cameras[i]);
                 let disparity = depth::disparity(&c.depth);
                 let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
                 c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
+                c.texture_pending = false;
             }
             if self.share_inventions {
                 inventions.push(Invention {
@@ -327,7 +337,14 @@ impl Completer {
         Ok(found.into_iter().map(|t| t.found).collect())
     }
 
+    /// Completes one view, its texture included.
     pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {
+        self.complete_view(v, index, false)
+    }
+
+    /// Completes one view; with `texture_later` the exemplar's texture is left to the color
+    /// transfer (`complete_views`).
+    fn complete_view(&mut self, v: &ViewInputs, index: usize, texture_later: bool) -> Result<Completed> {
         let (w, h) = (v.width, v.height);
         // The first fill serves the ablation without depth, a learned depth prior (which reads the
         // image) and the learned or provided inpaintings (kept as they are); the built-in ones
@@ -355,6 +372,7 @@ impl Completer {
                 space: None,
                 fit_pixels: 0,
                 residual: 0.0,
+                texture_pending: false,
             });
         }
         let view = DepthView { width: w, height: h, image: &rgb, render_depth: v.expected_depth, valid: &valid };
@@ -378,9 +396,13 @@ impl Completer {
         let planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
         let labels = planes.fill_labels(&anchored.depth, &fill, w);
         // the built-in inpainter fills again, surface by surface; a learned or provided
-        // inpainting is kept, since it sees more than a surface label
+        // inpainting is kept, since it sees more than a surface label. The exemplar's texture
+        // waits for the transfer when one follows: until then the depth's edge-aware refinement
+        // sees the surface-wise harmonic fill, without the edges of an invented texture.
+        let texture_pending = texture_later && matches!(self.inpainter, Inpainter::Exemplar(_));
         let rgb = match &self.inpainter {
             Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
+            Inpainter::Exemplar(_) if texture_pending => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
             Inpainter::Exemplar(e) => {
                 let avoid = leftover(v.hole, &fill);
                 e.fill_rectified(v.rgb, &fill, &avoid, &labels, Some(&disparity), &planes.planes, &v.intrinsics, w, h)?
@@ -419,6 +441,7 @@ impl Completer {
             space: Some(space),
             fit_pixels: anchored.fit_pixels,
             residual: anchored.residual,
+            texture_pending,
         })
     }
 
