@@ -397,12 +397,17 @@ impl Completer {
         let labels = planes.fill_labels(&anchored.depth, &fill, w);
         // the built-in inpainter fills again, surface by surface; a learned or provided
         // inpainting is kept, since it sees more than a surface label. The exemplar's texture
-        // waits for the transfer when one follows: until then the depth's edge-aware refinement
-        // sees the surface-wise harmonic fill, without the edges of an invented texture.
+        // waits for the transfer when one follows: until then the depth's edge-aware refinement,
+        // which moves only pixels on no continued plane, sees the harmonic fill of the whole hole
+        // (what the surface-wise fill gives those pixels; its per-surface passes over the window
+        // cost more than the exemplar at 504x378), without the edges of an invented texture.
         let texture_pending = texture_later && matches!(self.inpainter, Inpainter::Exemplar(_));
         let rgb = match &self.inpainter {
             Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
-            Inpainter::Exemplar(_) if texture_pending => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
+            Inpainter::Exemplar(_) if texture_pending => {
+                let known: Vec<bool> = fill.iter().map(|&f| !f).collect();
+                harmonic::harmonic_fill(v.rgb, &known, w, h, 3)
+            }
             Inpainter::Exemplar(e) => {
                 let avoid = leftover(v.hole, &fill);
                 e.fill_rectified(v.rgb, &fill, &avoid, &labels, Some(&disparity), &planes.planes, &v.intrinsics, w, h)?
