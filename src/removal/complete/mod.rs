@@ -184,7 +184,7 @@ pub struct Completed {
     pub space: Option<PriorSpace>,
     pub fit_pixels: usize,
     pub residual: f64,
-    /// The exemplar's texture is still owed: `rgb` holds the surface-wise harmonic fill, and the
+    /// The exemplar's texture is still owed: `rgb` holds the harmonic fill of the hole, and the
     /// color transfer synthesizes the texture of whatever it does not find in the photos.
     pub texture_pending: bool,
 }
