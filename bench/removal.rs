@@ -212,8 +212,12 @@ impl Training<'_> {
             if *variant == PERFECT_INPAINTING {
                 a.extend(s(&["--inpainted", &p(self.truth)]));
             }
-            if *variant == ONE_SOURCE || *variant == DISAGREEING {
-                let seeds = if *variant == ONE_SOURCE { &DISAGREEING_SEEDS[..1] } else { &DISAGREEING_SEEDS[..] };
+            let seeds = match *variant {
+                ONE_SOURCE => Some(&DISAGREEING_SEEDS[..1]),
+                DISAGREEING => Some(&DISAGREEING_SEEDS[..]),
+                _ => None,
+            };
+            if let Some(seeds) = seeds {
                 a.extend(s(&["--inpainted", &p(&self.seed_inpaintings(dir, &tagged, seeds))]));
             }
             if self.exposure {

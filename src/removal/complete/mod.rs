@@ -313,8 +313,9 @@ impl Completer {
                 }
             }
             if known.iter().any(|&k| k) || c.texture_pending {
-                // a pending texture covers the completion's whole fill (its see-through pixels too)
-                let fill: Vec<bool> = (0..w * h).map(|p| fills[i][p] || (c.texture_pending && c.fill[p])).collect();
+                // a pending texture covers the completion's whole fill (the view's, plus its
+                // see-through pixels)
+                let fill: &[bool] = if c.texture_pending { &c.fill } else { fills[i] };
                 let rest: Vec<bool> = (0..w * h).map(|p| fill[p] && !known[p]).collect();
                 // captured and shared colors are sources now; the rest of the hole's render still is not
                 let found_or_fill: Vec<bool> = (0..w * h).map(|p| fill[p] || known[p]).collect();
