@@ -225,3 +225,92 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfe
     assert!(top_as_top as f64 >= top_share * n, "the bench top's texture does not reach the box's footprint");
     assert!(top_as_hedge as f64 <= hedge_share * n, "the hedge's texture covers the bench top");
 }
+
+/// A pillar stands on a wider pedestal in front of a wall, all three fronto-parallel: pillar and
+/// pedestal on one plane at z = 2 (so one plane is fitted to both), the wall at z = 5. The removed
+/// object covered the pillar's lower right corner and the wall beside it, down to the pedestal's
+/// top. The near plane flanks the hole pixels right of the pillar from two sides (the pillar to
+/// their left, the pedestal below), so it is continued over them; but the Gaussians left after
+/// removal cover those pixels at the wall's depth (other views saw the wall there, past where the
+/// pillar would be), and the pillar's own hole pixels at the pillar's. Each hole pixel must be
+/// completed on the surface those Gaussians show: the wall's depth and texture right of the
+/// pillar, the pillar's left of its edge. (Without `defer_to_covering` the wall's hole pixels
+/// were completed on the near plane: a grey block beside the pillar, as on the statue capture.)
+#[test]
+fn a_nearer_surface_is_not_continued_over_what_the_remaining_gaussians_show_behind_it() {
+    #[derive(Clone, Copy, PartialEq, Debug)]
+    enum Part {
+        Pillar,
+        Pedestal,
+        Wall,
+    }
+    let gpu = common::gpu();
+    let (w, h) = (120usize, 90usize);
+    let cam = Camera::look_at("pillar", w as u32, h as u32, 60.0, [0.0; 3], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]);
+    let (pillar_right, pedestal_top, pedestal_right) = (50usize, 60usize, 100usize);
+    let part = |x: usize, y: usize| match (x, y) {
+        (x, y) if y >= pedestal_top && x < pedestal_right => Part::Pedestal,
+        (x, y) if y < pedestal_top && x < pillar_right => Part::Pillar,
+        _ => Part::Wall,
+    };
+    let wave = |v: f64, f: f64| (0.5 + 0.5 * (v * f).sin()) as f32;
+    let (mut rgb, mut depth) = (vec![0f32; 3 * w * h], vec![0f32; w * h]);
+    for p in 0..w * h {
+        let (x, y) = (p % w, p / w);
+        let z = if part(x, y) == Part::Wall { 5.0 } else { 2.0 };
+        // the pixel's point on its plane, for a texture fixed to the surface
+        let (px, py) = (((x as f64 + 0.5 - cam.cx) / cam.fx) * z, ((y as f64 + 0.5 - cam.cy) / cam.fy) * z);
+        let c = match part(x, y) {
+            Part::Pillar => [0.45 + 0.1 * wave(py, 19.0), 0.45, 0.5],
+            Part::Pedestal => [0.9, 0.88 + 0.08 * wave(px, 17.0), 0.85],
+            Part::Wall => [0.1 + 0.1 * wave(px, 13.0), 0.45 + 0.2 * wave(px + py, 23.0), 0.1],
+        };
+        for k in 0..3 {
+            rgb[k * w * h + p] = c[k];
+        }
+        depth[p] = z as f32;
+    }
+    let hole: Vec<bool> =
+        (0..w * h).map(|p| (38..78).contains(&(p % w)) && (36..pedestal_top).contains(&(p / w))).collect();
+    let wall_in_hole: Vec<usize> = (0..w * h).filter(|&p| hole[p] && part(p % w, p / w) == Part::Wall).collect();
+    let pillar_in_hole: Vec<usize> = (0..w * h).filter(|&p| hole[p] && part(p % w, p / w) == Part::Pillar).collect();
+    // after removal the remaining Gaussians cover the whole view, the hole at the true depths
+    let alpha = vec![1.0f32; w * h];
+    let rendered: Vec<f32> = (0..3 * w * h).map(|k| if hole[k % (w * h)] { 0.0 } else { rgb[k] }).collect();
+    let cfg = CompletionConfig::default();
+    let mut completer = Completer::load(&gpu, &cfg, 7, &[("pillar".into(), (w as u32, h as u32))]).unwrap();
+    let inputs = ViewInputs {
+        width: w,
+        height: h,
+        intrinsics: (&cam).into(),
+        rgb: &rendered,
+        alpha: &alpha,
+        expected_depth: &depth,
+        fill: &hole,
+        hole: &hole,
+    };
+    let done = completer.complete(&inputs, 0).unwrap();
+    let at_depth = |p: usize| ((done.depth[p] - depth[p]) / depth[p]).abs() < 0.03;
+    // green dominates the wall's colors, and no other part's
+    let green = |p: usize| {
+        let c = [0, 1, 2].map(|k| done.rgb[k * w * h + p]);
+        c[1] > c[0] + 0.15 && c[1] > c[2] + 0.15
+    };
+    let share = |pixels: &[usize], f: &dyn Fn(usize) -> bool| {
+        pixels.iter().filter(|&&p| f(p)).count() as f64 / pixels.len() as f64
+    };
+    let (wall_depth, wall_green) = (share(&wall_in_hole, &at_depth), share(&wall_in_hole, &green));
+    let (pillar_depth, pillar_green) = (share(&pillar_in_hole, &at_depth), share(&pillar_in_hole, &green));
+    eprintln!(
+        "wall hole pixels {}: at the wall's depth {wall_depth:.3}, green {wall_green:.3}; pillar hole pixels {}: \
+         at its depth {pillar_depth:.3}, green {pillar_green:.3}; {} pixels took the farther plane",
+        wall_in_hole.len(),
+        pillar_in_hole.len(),
+        done.farther_covered
+    );
+    assert!(wall_in_hole.len() > 500 && pillar_in_hole.len() > 200);
+    assert!(wall_depth >= 0.95, "the wall's hole pixels were completed in front of it");
+    assert!(wall_green >= 0.9, "the wall's hole pixels took another surface's texture");
+    assert!(pillar_depth >= 0.95, "the pillar's hole pixels left its plane");
+    assert!(pillar_green <= 0.05, "the wall's texture covers the pillar");
+}

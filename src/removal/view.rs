@@ -43,6 +43,8 @@ pub struct ViewReport {
     pub fit_rms: f64,
     /// Covered hole pixels that look through a gap past the surrounding surfaces.
     pub see_through_pixels: usize,
+    /// Fill pixels that took the farther plane the Gaussians left after removal cover them with.
+    pub farther_covered_pixels: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hole_depth_scale: Option<DepthScale>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -86,6 +88,7 @@ impl<'a> EditedView<'a> {
         let m = &mut self.masked;
         let count = |v: &[bool]| v.iter().filter(|&&x| x).count();
         self.report.see_through_pixels = count(&completed.fill) - count(&m.fill);
+        self.report.farther_covered_pixels = completed.farther_covered;
         m.fill.clone_from(&completed.fill);
         self.report.hole_pixels = count(&m.hole);
         self.report.fill_pixels = count(&m.fill);

@@ -7,7 +7,8 @@
 //!   LaMa-contract ONNX model, or the user's own inpainted views.
 //! - `exemplar`: PatchMatch exemplar inpainting on the GPU, guided by the surfaces.
 //! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
-//!   edge-aware model-free refinement.
+//!   farther plane where the Gaussians left after removal show it, the edge-aware model-free
+//!   refinement.
 //! - `diffusion`: the masked DDIM loop of a depth-inpainting denoiser (ONNX).
 //! - `harmonic`: the harmonic fill (smooth interpolation into a hole) of colors and depth.
 //! - `surfaces`: the background planes around a hole, for the depth prior and for keeping each
@@ -187,6 +188,9 @@ pub struct Completed {
     /// The exemplar's texture is still owed: `rgb` holds the harmonic fill of the hole, and the
     /// color transfer synthesizes the texture of whatever it does not find in the photos.
     pub texture_pending: bool,
+    /// Fill pixels that took a farther plane where the Gaussians left after removal cover them
+    /// there (`depth::defer_to_covering`).
+    pub farther_covered: usize,
 }
 
 impl Completer {
@@ -374,6 +378,7 @@ impl Completer {
                 fit_pixels: 0,
                 residual: 0.0,
                 texture_pending: false,
+                farther_covered: 0,
             });
         }
         let view = DepthView { width: w, height: h, image: &rgb, render_depth: v.expected_depth, valid: &valid };
@@ -395,7 +400,11 @@ impl Completer {
         let disparity = depth::disparity(&anchored.depth);
         let around: Vec<bool> = (0..w * h).map(|i| !fill[i] && covered[i]).collect();
         let planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
-        let labels = planes.fill_labels(&anchored.depth, &fill, w);
+        let mut labels = planes.fill_labels(&anchored.depth, &fill, w);
+        // but not in front of what the Gaussians left after removal show on a farther plane
+        let farther_covered =
+            depth::defer_to_covering(&planes, v.expected_depth, v.alpha, &fill, &mut labels, &mut anchored.depth, w);
+        let disparity = if farther_covered > 0 { depth::disparity(&anchored.depth) } else { disparity };
         // the built-in inpainter fills again, surface by surface; a learned or provided
         // inpainting is kept, since it sees more than a surface label. The exemplar's texture
         // waits for the transfer when one follows: until then the depth's edge-aware refinement,
@@ -448,6 +457,7 @@ impl Completer {
             fit_pixels: anchored.fit_pixels,
             residual: anchored.residual,
             texture_pending,
+            farther_covered,
         })
     }
 
