@@ -109,6 +109,24 @@ fn the_texture_left_to_the_color_transfer_continues_the_bench_top_too() {
     bench_top_continues(0.45, 0.75, 0.1, true);
 }
 
+/// The built-in completion with its defaults, for the one view `cam`.
+fn default_completer(gpu: &cogeo::gpu::Gpu, cam: &Camera) -> Completer {
+    Completer::load(gpu, &CompletionConfig::default(), 7, &[(cam.name.clone(), (cam.width, cam.height))]).unwrap()
+}
+
+/// One view's completion inputs: the render after removal (`rgb`, `alpha`, `depth`) and its hole,
+/// which is all to be filled.
+fn view_inputs<'a>(
+    cam: &Camera,
+    rgb: &'a [f32],
+    alpha: &'a [f32],
+    depth: &'a [f32],
+    hole: &'a [bool],
+) -> ViewInputs<'a> {
+    let (width, height) = (cam.width as usize, cam.height as usize);
+    ViewInputs { width, height, intrinsics: cam.into(), rgb, alpha, expected_depth: depth, fill: hole, hole }
+}
+
 /// Removes the box from the bench ending at x = `bench_end`; at least `top_share` of the hole
 /// pixels whose true surface is the bench top must be completed at its depth (within 3 %) and
 /// with its texture, at most `hedge_share` with the hedge's. With `transfer_follows` the view is
@@ -163,18 +181,8 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfe
         top_in_hole.len()
     );
 
-    let cfg = CompletionConfig::default();
-    let mut completer = Completer::load(&gpu, &cfg, 7, &[("bench".into(), (w as u32, h as u32))]).unwrap();
-    let inputs = ViewInputs {
-        width: w,
-        height: h,
-        intrinsics: (&cam).into(),
-        rgb: &rendered,
-        alpha: &alpha,
-        expected_depth: &render_depth,
-        fill: &hole,
-        hole: &hole,
-    };
+    let mut completer = default_completer(&gpu, &cam);
+    let inputs = view_inputs(&cam, &rendered, &alpha, &render_depth, &hole);
     let done = if transfer_follows {
         let mut done = completer.complete_views(&[inputs], true, &mut |_, _| {}).unwrap();
         assert!(done[0].texture_pending, "the exemplar's texture waits for the transfer");
@@ -277,19 +285,7 @@ fn a_nearer_surface_is_not_continued_over_what_the_remaining_gaussians_show_behi
     // after removal the remaining Gaussians cover the whole view, the hole at the true depths
     let alpha = vec![1.0f32; w * h];
     let rendered: Vec<f32> = (0..3 * w * h).map(|k| if hole[k % (w * h)] { 0.0 } else { rgb[k] }).collect();
-    let cfg = CompletionConfig::default();
-    let mut completer = Completer::load(&gpu, &cfg, 7, &[("pillar".into(), (w as u32, h as u32))]).unwrap();
-    let inputs = ViewInputs {
-        width: w,
-        height: h,
-        intrinsics: (&cam).into(),
-        rgb: &rendered,
-        alpha: &alpha,
-        expected_depth: &depth,
-        fill: &hole,
-        hole: &hole,
-    };
-    let done = completer.complete(&inputs, 0).unwrap();
+    let done = default_completer(&gpu, &cam).complete(&view_inputs(&cam, &rendered, &alpha, &depth, &hole), 0).unwrap();
     let at_depth = |p: usize| ((done.depth[p] - depth[p]) / depth[p]).abs() < 0.03;
     // green dominates the wall's colors, and no other part's
     let green = |p: usize| {
