@@ -196,7 +196,7 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfe
             photo_colors: ColorAffine::IDENTITY,
         };
         let cameras = std::slice::from_ref(&cam);
-        completer.transfer_colors(cameras, &[own], &[&hole], &[&hole], &mut done, &mut |_, _| {}).unwrap();
+        completer.transfer_colors(cameras, &[own], &[&hole], &mut done, &mut |_, _| {}).unwrap();
         assert!(!done[0].texture_pending, "the transfer synthesized the texture");
         done.remove(0)
     } else {

@@ -311,10 +311,9 @@ fn transfer_colors(
 ) -> Result<()> {
     let mut completed = take_completions(views);
     let (sources, holes) = sources_and_holes(views);
-    let fills: Vec<&[bool]> = views.iter().map(|v| v.masked.fill.as_slice()).collect();
-    let transferred = completer
-        .transfer_colors(cameras, &sources, &holes, &fills, &mut completed, &mut |d, t| progress("transfer", d, t))?;
-    drop((sources, holes, fills));
+    let transferred =
+        completer.transfer_colors(cameras, &sources, &holes, &mut completed, &mut |d, t| progress("transfer", d, t))?;
+    drop((sources, holes));
     put_back(views, completed);
     for (v, t) in views.iter_mut().zip(transferred) {
         v.report.transferred_pixels = Some(t.iter().filter(|&&f| f).count());

@@ -270,14 +270,14 @@ impl Completer {
     /// render background that few views constrained): pixels whose completed surface point another
     /// view saw take that view's captured color (`sources`, one per view); with
     /// `share_inventions`, fill pixels whose surface point an earlier view invented take that
-    /// invention (`transfer::borrow_inventions`); what is left of `fill` is inpainted again, now
-    /// from those colors too. Returns, per view, the pixels transferred from photos.
+    /// invention (`transfer::borrow_inventions`); what is left of the completion's fill (its view's
+    /// fill and see-through pixels) is inpainted again, now from those colors too. Returns, per
+    /// view, the pixels transferred from photos.
     pub fn transfer_colors(
         &mut self,
         cameras: &[Camera],
         sources: &[SourceView],
         holes: &[&[bool]],
-        fills: &[&[bool]],
         completed: &mut [Completed],
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Vec<Vec<bool>>> {
@@ -293,7 +293,7 @@ impl Completer {
         // for the views after it (without them the views are independent)
         let mut order: Vec<usize> = (0..completed.len()).collect();
         if self.share_inventions {
-            let left = |i: usize| (0..fills[i].len()).filter(|&p| fills[i][p] && !found[i].found[p]).count();
+            let left = |i: usize| completed[i].fill.iter().zip(&found[i].found).filter(|(&f, &t)| f && !t).count();
             order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
         }
         let mut inventions: Vec<Invention> = Vec::new();
@@ -304,7 +304,7 @@ impl Completer {
             let c = &mut completed[i];
             let mut known = t.found.clone();
             let mut image = c.rgb.clone();
-            let invented: Vec<bool> = (0..w * h).map(|p| fills[i][p] && !t.found[p]).collect();
+            let invented: Vec<bool> = (0..w * h).map(|p| c.fill[p] && !t.found[p]).collect();
             let shared = self
                 .share_inventions
                 .then(|| borrow_inventions(&cameras[i], &c.depth, &invented, &inventions, TRANSFER_TOLERANCE));
@@ -317,12 +317,9 @@ impl Completer {
                 }
             }
             if known.iter().any(|&k| k) || c.texture_pending {
-                // a pending texture covers the completion's whole fill (the view's, plus its
-                // see-through pixels)
-                let fill: &[bool] = if c.texture_pending { &c.fill } else { fills[i] };
-                let rest: Vec<bool> = (0..w * h).map(|p| fill[p] && !known[p]).collect();
+                let rest: Vec<bool> = (0..w * h).map(|p| c.fill[p] && !known[p]).collect();
                 // captured and shared colors are sources now; the rest of the hole's render still is not
-                let found_or_fill: Vec<bool> = (0..w * h).map(|p| fill[p] || known[p]).collect();
+                let found_or_fill: Vec<bool> = (0..w * h).map(|p| c.fill[p] || known[p]).collect();
                 let avoid = leftover(holes[i], &found_or_fill);
                 let k = Intrinsics::from(&cameras[i]);
                 let disparity = depth::disparity(&c.depth);
