@@ -59,7 +59,9 @@ pub const REAL_SCENES: [RealSpec; 4] = [
         objects: 3,
         labels: "1,2",
         seed: 4,
-        object_size: "0.045",
+        // three objects of 0.045 near each other, each seen whole from 70 % of the views, found no
+        // place on a fresh training of the capture (two did, 16 times over)
+        object_size: "0.035",
     },
 ];
 
