@@ -109,6 +109,7 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
         object_size: 0.06,
         contact_shadow: 0.0,
         points: 2000,
+        placement: None,
     };
     let out = root.join("bench");
     let summary = composite(&gpu, &cfg, &out, &|_, _, _| {}).unwrap();
@@ -174,4 +175,28 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
         unseen < object_pixels.iter().sum::<usize>(),
         "{unseen} never-seen pixels for {object_pixels:?} object pixels"
     );
+
+    // the same placement again from the first composite's synth.json, with another seed (which
+    // would place the objects elsewhere): the same objects, masks and depths
+    let placement = out.join("synth.json");
+    let again = root.join("again");
+    let cfg_again = CompositeConfig { placement: Some(placement.clone()), seed: cfg.seed + 1, ..cfg.clone() };
+    let summary_again = composite(&gpu, &cfg_again, &again, &|_, _, _| {}).unwrap();
+    for (a, b) in summary.objects.iter().zip(&summary_again.objects) {
+        assert_eq!((a.label, a.center, a.size), (b.label, b.center, b.size), "object moved");
+    }
+    assert_eq!(summary_again.objects.len(), summary.objects.len());
+    for cam in &cameras {
+        for file in [format!("object_mask/{}.png", cam.name), format!("depth/{}.exr", cam.name)] {
+            let (a, b) = (std::fs::read(out.join(&file)).unwrap(), std::fs::read(again.join(&file)).unwrap());
+            assert!(a == b, "{file} differs when composited from the placement file");
+        }
+    }
+    // a placement with another number of objects is refused, naming the file
+    let three = CompositeConfig { objects: 3, gt_without: vec![], ..cfg_again };
+    let Err(err) = composite(&gpu, &three, &root.join("three"), &|_, _, _| {}) else {
+        panic!("a placement of two objects was taken for three")
+    };
+    let err = err.to_string();
+    assert!(err.contains("synth.json") && err.contains("holds 2 objects"), "unexpected error: {err}");
 }

@@ -85,6 +85,13 @@ pub struct SynthArgs {
     /// views' composited surfaces.
     #[arg(long, default_value_t = 40_000, requires = "composite_into")]
     pub sparse_points: usize,
+    /// With --composite-into: stand the objects where an earlier composite's synth.json says
+    /// (its ground plane and objects, used as they are; --objects must match) instead of placing
+    /// them anew; --seed still draws their textures and the sparse points. Placement reads
+    /// --scene's depth, which differs from one training of the capture to the next: this keeps a
+    /// benchmark's objects where they were.
+    #[arg(long, value_name = "SYNTH_JSON", requires = "composite_into")]
+    pub placement: Option<PathBuf>,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
@@ -143,6 +150,7 @@ fn composite(a: &SynthArgs, capture: &std::path::Path) -> Result<()> {
         object_size: a.object_size,
         contact_shadow: a.contact_shadow,
         points: a.sparse_points,
+        placement: a.placement.clone(),
     };
     let gpu = open_gpu(&a.device)?;
     let bar = stage_progress();

@@ -27,7 +27,7 @@ pub(super) fn norm(a: V3) -> V3 {
     scale(a, 1.0 / dot(a, a).sqrt())
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Shape {
     Box,
     Sphere,
@@ -56,7 +56,7 @@ impl Shape {
     }
 }
 
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Object {
     /// Instance label in the masks (1-based).
     pub label: u8,

@@ -9,7 +9,7 @@ use crate::scene::Camera;
 /// The frame the objects are placed in: `origin` on the supporting plane, `u`, `v` spanning it,
 /// `n` its normal towards the cameras, and `unit` world units per local unit (objects are
 /// built in the synth's units, where they are 0.3-0.5 across, standing on local z = 0).
-#[derive(Clone, Debug, serde::Serialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Ground {
     pub origin: V3,
     pub u: V3,

@@ -47,6 +47,9 @@ pub struct CompositeConfig {
     pub contact_shadow: f64,
     /// Sparse points written to the COLMAP model (sampled from the training views' composited depth).
     pub points: usize,
+    /// An earlier composite's synth.json whose ground and objects are used instead of placing
+    /// new ones (`read_placement`).
+    pub placement: Option<PathBuf>,
 }
 
 /// One photo of the capture with the original scene's depth there.
@@ -125,7 +128,10 @@ pub fn composite(
     let cameras: Vec<Camera> = views.iter().map(|v| v.camera.clone()).collect();
     let mut rng = Rng::new(cfg.seed);
     let sparse: Vec<V3> = data_points.iter().map(|p| p.xyz).collect();
-    let (ground, objects) = place(cfg, &views, &cameras, &sparse, &mut rng)?;
+    let (ground, objects) = match &cfg.placement {
+        Some(path) => read_placement(path, cfg.objects)?,
+        None => place(cfg, &views, &cameras, &sparse, &mut rng)?,
+    };
     let kept: Vec<Object> = objects.iter().filter(|o| !cfg.gt_without.contains(&o.label)).cloned().collect();
     let subset_dir = (!cfg.gt_without.is_empty()).then(|| subset_dir_name(&cfg.gt_without));
     let mut with_objects = Vec::with_capacity(count);
@@ -182,6 +188,28 @@ pub fn composite(
     let text = serde_json::to_string_pretty(&meta)?;
     write_atomic(&out.join("synth.json"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
     Ok(CompositeSummary { objects, ground, views: count, views_with_overlap })
+}
+
+/// The ground and objects of an earlier composite's synth.json (`placement`), which must hold
+/// `count` objects labelled 1..=count.
+pub fn read_placement(path: &Path, count: usize) -> Result<(Ground, Vec<Object>)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("{}: cannot read the placement", path.display()))?;
+    let meta: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not a JSON file", path.display()))?;
+    let field =
+        |name: &str| meta.get(name).cloned().with_context(|| format!("{}: no \"{name}\" field", path.display()));
+    let ground: Ground = serde_json::from_value(field("ground")?)
+        .with_context(|| format!("{}: \"ground\" is not a composite's ground frame", path.display()))?;
+    let objects: Vec<Object> = serde_json::from_value(field("objects")?)
+        .with_context(|| format!("{}: \"objects\" is not a list of composite objects", path.display()))?;
+    if objects.len() != count {
+        bail!("{}: holds {} objects, --objects says {count}", path.display(), objects.len());
+    }
+    if objects.iter().enumerate().any(|(i, o)| o.label as usize != i + 1) {
+        bail!("{}: \"objects\" must be labelled 1..={count} in order", path.display());
+    }
+    Ok((ground, objects))
 }
 
 /// Finds the supporting plane and places the objects on it.
