@@ -267,8 +267,9 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &st
     use crate::num;
     let mut md = format!(
         "Removal on real photos with exact ground truth: virtual objects composited into the shared captures \
-         (`cogeo synth --composite-into`; statue `images_2`, cup `images`, further downscaled by the row's \
-         `--real-downscale`; the row's number of training iterations of the capture without and with the objects), \
+         (`cogeo synth --composite-into`, standing where `bench/real_placements/` says; statue `images_2`, cup \
+         `images`, further downscaled by the row's `--real-downscale`; the row's number of training iterations of \
+         the capture without and with the objects), \
          `cargo bench --bench removal -- --scenes real`, on {device}. Held-out views against the original photos: inside the removed objects' \
          silhouettes (mask), its parts that some training view saw (seen elsewhere) or none did (never seen), \
          outside the silhouettes (outside), and the silhouettes' bounding box (bbox).\n\n\
