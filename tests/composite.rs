@@ -178,14 +178,13 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
 
     // the same placement again from the first composite's synth.json, with another seed (which
     // would place the objects elsewhere): the same objects, masks and depths
-    let placement = out.join("synth.json");
     let again = root.join("again");
-    let cfg_again = CompositeConfig { placement: Some(placement.clone()), seed: cfg.seed + 1, ..cfg.clone() };
+    let cfg_again = CompositeConfig { placement: Some(out.join("synth.json")), seed: cfg.seed + 1, ..cfg.clone() };
     let summary_again = composite(&gpu, &cfg_again, &again, &|_, _, _| {}).unwrap();
+    assert_eq!(summary_again.objects.len(), summary.objects.len());
     for (a, b) in summary.objects.iter().zip(&summary_again.objects) {
         assert_eq!((a.label, a.center, a.size), (b.label, b.center, b.size), "object moved");
     }
-    assert_eq!(summary_again.objects.len(), summary.objects.len());
     for cam in &cameras {
         for file in [format!("object_mask/{}.png", cam.name), format!("depth/{}.exr", cam.name)] {
             let (a, b) = (std::fs::read(out.join(&file)).unwrap(), std::fs::read(again.join(&file)).unwrap());

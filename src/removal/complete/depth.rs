@@ -297,11 +297,11 @@ pub fn defer_to_covering(
     depth: &mut [f32],
     w: usize,
 ) -> usize {
-    let covering = surfaces.labels(render_depth, w);
     let mut changed = 0;
-    for i in 0..fill.len() {
-        let plane = covering[i];
-        if !fill[i] || alpha[i] < COVERED_ALPHA || plane == 0 || plane == labels[i] {
+    for i in (0..fill.len()).filter(|&i| fill[i] && alpha[i] >= COVERED_ALPHA) {
+        // the plane the covering Gaussians' depth lies on (labelled only here: a few fill pixels)
+        let plane = surfaces.label_at(i, w, render_depth[i]);
+        if plane == 0 || plane == labels[i] {
             continue;
         }
         let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);

@@ -219,6 +219,11 @@ impl Surfaces {
         self.labels_within(depth, w, LABEL_TOLERANCE)
     }
 
+    /// `labels` at the one pixel `i` (row width `w`) whose depth is `depth`.
+    pub fn label_at(&self, i: usize, w: usize, depth: f32) -> u8 {
+        self.member_within(i, w, 1.0 / depth as f64, LABEL_TOLERANCE).map_or(0, |s| s as u8 + 1)
+    }
+
     /// Per pixel, 1 + the plane within `tolerance` (relative disparity) of the depth, or 0.
     fn labels_within(&self, depth: &[f32], w: usize, tolerance: f64) -> Vec<u8> {
         depth
