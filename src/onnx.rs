@@ -62,7 +62,9 @@ impl Tensor {
 
 /// One loaded ONNX model.
 pub struct Model {
-    session: ort::session::Session,
+    /// Behind a lock: a run needs the session mutably, and a model is shared by the threads
+    /// that complete views in parallel.
+    session: std::sync::Mutex<ort::session::Session>,
     path: PathBuf,
     inputs: Vec<String>,
     outputs: Vec<String>,
@@ -80,7 +82,7 @@ impl Model {
             .map_err(|e| anyhow!("{}: cannot load the ONNX model: {e}", path.display()))?;
         let inputs = session.inputs().iter().map(|o| o.name().to_string()).collect();
         let outputs = session.outputs().iter().map(|o| o.name().to_string()).collect();
-        Ok(Model { session, path: path.to_path_buf(), inputs, outputs })
+        Ok(Model { session: std::sync::Mutex::new(session), path: path.to_path_buf(), inputs, outputs })
     }
 
     pub fn path(&self) -> &Path {
@@ -120,7 +122,7 @@ impl Model {
     }
 
     /// Runs the model on named float inputs; returns every output in the model's order.
-    pub fn run(&mut self, inputs: &[(&str, &Tensor)]) -> Result<Vec<Tensor>> {
+    pub fn run(&self, inputs: &[(&str, &Tensor)]) -> Result<Vec<Tensor>> {
         let mut values = Vec::with_capacity(inputs.len());
         for (name, t) in inputs {
             let v = ort::value::Tensor::from_array((t.shape.clone(), t.data.clone()))
@@ -128,7 +130,8 @@ impl Model {
             values.push((std::borrow::Cow::from(name.to_string()), ort::session::SessionInputValue::from(v)));
         }
         let path = self.path.display().to_string();
-        let outputs = self.session.run(values).map_err(|e| anyhow!("{path}: inference failed: {e}"))?;
+        let mut session = self.session.lock().map_err(|_| anyhow!("{path}: a model run panicked"))?;
+        let outputs = session.run(values).map_err(|e| anyhow!("{path}: inference failed: {e}"))?;
         let mut result = Vec::new();
         for name in &self.outputs {
             let (shape, data) = outputs[name.as_str()]

@@ -131,12 +131,12 @@ fn builtin_prior_follows_a_curved_wall_into_each_hole() {
 fn onnx_denoiser_loop_synthesizes_only_the_hole() {
     let dir = tmp("denoiser");
     let path = onnx::write(&dir, "denoiser.onnx", &onnx::tiny_denoiser());
-    let mut den = OnnxDenoiser::load(&path).unwrap();
+    let den = OnnxDenoiser::load(&path).unwrap();
     let (w, h) = (40, 30);
     let anchor: Vec<f32> = (0..w * h).map(|i| 1.0 + 0.05 * (i % w) as f32 + 0.02 * (i / w) as f32).collect();
     let hole: Vec<bool> = (0..w * h).map(|i| (10..30).contains(&(i % w)) && (8..22).contains(&(i / w))).collect();
     let image = vec![0.3; 3 * w * h];
-    let out = masked_ddim(&anchor, &hole, &image, w, h, 8, 11, &mut den).unwrap();
+    let out = masked_ddim(&anchor, &hole, &image, w, h, 8, 11, &den).unwrap();
     // the tiny model's clean signal is normalized 0: the middle of the anchor's range
     let (lo, hi) = (1.0f32, 1.0 + 0.05 * 39.0 + 0.02 * 29.0);
     for i in 0..w * h {
@@ -217,7 +217,7 @@ fn hole_mask_thresholds_the_removed_weight_share() {
 fn onnx_inpainter_fills_only_the_hole_through_crop_and_resize() {
     let dir = tmp("lama");
     let path = onnx::write(&dir, "lama.onnx", &onnx::tiny_lama());
-    let mut inp = Inpainter::onnx(&path).unwrap();
+    let inp = Inpainter::onnx(&path).unwrap();
     let (w, h) = (64, 48);
     let image: Vec<f32> = (0..3 * w * h).map(|i| ((i * 7919) % 101) as f32 / 100.0).collect();
     let hole = hole(w, h);
@@ -264,7 +264,7 @@ fn onnx_depth_priors_are_anchored_in_their_own_space() {
         let image: Vec<f32> = (0..3).flat_map(|_| encoded.iter().copied()).collect();
         let render_depth: Vec<f32> = depth_truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { d }).collect();
         let view = DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid };
-        let mut prior = DepthPrior::onnx(&path, contract).unwrap();
+        let prior = DepthPrior::onnx(&path, contract).unwrap();
         let (p, space) = prior.predict(&view).unwrap();
         assert_eq!(p.len(), w * h);
         let want_space =

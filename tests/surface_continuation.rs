@@ -181,7 +181,7 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfe
         top_in_hole.len()
     );
 
-    let mut completer = default_completer(&gpu, &cam);
+    let completer = default_completer(&gpu, &cam);
     let inputs = view_inputs(&cam, &rendered, &alpha, &render_depth, &hole);
     let done = if transfer_follows {
         let mut done = completer.complete_views(&[inputs], true, &mut |_, _| {}).unwrap();

@@ -188,7 +188,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     let gpu = open_gpu(&a.device)?;
     let views: Vec<(String, (u32, u32))> =
         data.train.iter().map(|v| (v.camera.name.clone(), (v.camera.width, v.camera.height))).collect();
-    let mut completer = Completer::load(&gpu, &f.completion, opts.seed, &views)?;
+    let completer = Completer::load(&gpu, &f.completion, opts.seed, &views)?;
     let _folder = super::args::OutputFolder::create(&a.out)?;
     eprintln!(
         "removing label(s) {labels:?} from {} Gaussians; editing {} views on {}",
@@ -207,7 +207,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         &photos_in_scene_colors(&data.train, a.exposure.as_deref())?,
         data.extent,
         &opts,
-        &mut completer,
+        &completer,
         &mut |stage, done, total| super::args::set_stage(&bar, stage, done, total),
     )?;
     bar.finish_and_clear();

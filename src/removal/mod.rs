@@ -157,7 +157,7 @@ pub fn remove(
     photos: &[Vec<f32>],
     extent: f64,
     opts: &RemoveOptions,
-    completer: &mut Completer,
+    completer: &Completer,
     progress: Progress,
 ) -> Result<Removal> {
     check_inputs(scene, labels, cameras, photos, opts)?;
@@ -260,7 +260,7 @@ fn check_inputs(
 /// Stage 3 over every view.
 fn complete_views(
     views: &mut [EditedView],
-    completer: &mut Completer,
+    completer: &Completer,
     transfer_follows: bool,
     progress: Progress,
 ) -> Result<()> {
@@ -306,7 +306,7 @@ fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Comp
 fn transfer_colors(
     views: &mut [EditedView],
     cameras: &[Camera],
-    completer: &mut Completer,
+    completer: &Completer,
     progress: Progress,
 ) -> Result<()> {
     let mut completed = take_completions(views);

@@ -125,7 +125,7 @@ impl DepthPrior {
     }
 
     /// The prior for a view at full resolution and the space it is affine in.
-    pub fn predict(&mut self, v: &DepthView) -> Result<(Vec<f32>, PriorSpace)> {
+    pub fn predict(&self, v: &DepthView) -> Result<(Vec<f32>, PriorSpace)> {
         let (w, h) = (v.width, v.height);
         match self {
             DepthPrior::BuiltIn => {

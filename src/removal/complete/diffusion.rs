@@ -27,7 +27,7 @@ pub fn alpha_bar(t: usize) -> f64 {
 pub trait Denoiser {
     #[allow(clippy::too_many_arguments)]
     fn predict_noise(
-        &mut self,
+        &self,
         sample: &[f32],
         timestep: usize,
         alpha_bar: f64,
@@ -54,7 +54,7 @@ impl OnnxDenoiser {
 
 impl Denoiser for OnnxDenoiser {
     fn predict_noise(
-        &mut self,
+        &self,
         sample: &[f32],
         timestep: usize,
         alpha_bar: f64,
@@ -89,7 +89,7 @@ pub fn masked_ddim(
     h: usize,
     steps: usize,
     seed: u64,
-    denoiser: &mut dyn Denoiser,
+    denoiser: &dyn Denoiser,
 ) -> Result<Vec<f32>> {
     if steps == 0 || steps > TRAIN_STEPS {
         bail!("diffusion steps must be 1..{TRAIN_STEPS}");
@@ -138,7 +138,7 @@ mod tests {
 
     impl Denoiser for Oracle {
         fn predict_noise(
-            &mut self,
+            &self,
             s: &[f32],
             _t: usize,
             ab: f64,
@@ -167,9 +167,9 @@ mod tests {
         let anchor: Vec<f32> = (0..w * h).map(|i| 2.0 + 0.1 * (i % w) as f32).collect();
         let hole: Vec<bool> = (0..w * h).map(|i| (3..8).contains(&(i % w)) && (2..6).contains(&(i / w))).collect();
         // the oracle's target: normalized value 0 (the middle of the anchor's range) everywhere
-        let mut oracle = Oracle(vec![0.0; w * h]);
+        let oracle = Oracle(vec![0.0; w * h]);
         let image = vec![0.5; 3 * w * h];
-        let out = masked_ddim(&anchor, &hole, &image, w, h, 10, 3, &mut oracle).unwrap();
+        let out = masked_ddim(&anchor, &hole, &image, w, h, 10, 3, &oracle).unwrap();
         let (lo, hi) = (2.0f32, 2.0 + 0.1 * (w - 1) as f32);
         for i in 0..w * h {
             if hole[i] {

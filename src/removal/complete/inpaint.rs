@@ -78,7 +78,7 @@ impl Inpainter {
     }
 
     /// As `inpaint`, for edited view `index` (the provided views are per view).
-    pub fn inpaint_view(&mut self, index: usize, image: &[f32], hole: &[bool], w: usize, h: usize) -> Result<Vec<f32>> {
+    pub fn inpaint_view(&self, index: usize, image: &[f32], hole: &[bool], w: usize, h: usize) -> Result<Vec<f32>> {
         if let Inpainter::Provided { views, dir } = self {
             let Some(view) = views.get(index).filter(|v| v.len() == 3 * w * h) else {
                 bail!("{}: no inpainted view {index} of size {w}x{h}", dir.display());
@@ -91,7 +91,7 @@ impl Inpainter {
 
     /// Fills the `hole` pixels of the planar RGB `image` (w x h); pixels outside the hole are
     /// returned unchanged.
-    pub fn inpaint(&mut self, image: &[f32], hole: &[bool], w: usize, h: usize) -> Result<Vec<f32>> {
+    pub fn inpaint(&self, image: &[f32], hole: &[bool], w: usize, h: usize) -> Result<Vec<f32>> {
         if image.len() != 3 * w * h || hole.len() != w * h {
             bail!("inpaint: image and mask sizes disagree with {w}x{h}");
         }
@@ -118,7 +118,7 @@ pub fn context_window(b: Rect, w: usize, h: usize, min_margin: usize) -> Rect {
     b.grown((b.width() / 2).max(min_margin), (b.height() / 2).max(min_margin), w, h)
 }
 
-fn lama(model: &mut Model, image: &[f32], hole: &[bool], w: usize, h: usize, bbox: Rect) -> Result<Vec<f32>> {
+fn lama(model: &Model, image: &[f32], hole: &[bool], w: usize, h: usize, bbox: Rect) -> Result<Vec<f32>> {
     let win = context_window(bbox, w, h, 16);
     let (cw, ch) = (win.width(), win.height());
     let patch = crop(image, w, h, 3, win);

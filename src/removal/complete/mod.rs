@@ -230,18 +230,41 @@ impl Completer {
     /// With `transfer_follows` (the color transfer runs next) the built-in exemplar leaves its
     /// texture to the transfer's own fill of what the photos do not give: a first fill of the whole
     /// hole would be overwritten there, pixel for pixel (`Completed::texture_pending`).
+    ///
+    /// Views are independent. Where completing one is host work only (the built-in depth
+    /// prior, no learned refiner, no inpainting before the surfaces are known, and no exemplar
+    /// pass: the harmonic inpainter, or the exemplar leaving its texture to the transfer) they run
+    /// on all cores; otherwise one after another, since the GPU and the models take one call at
+    /// a time. Either way view i's result depends only on view i.
     pub fn complete_views(
-        &mut self,
+        &self,
         views: &[ViewInputs],
         transfer_follows: bool,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Vec<Completed>> {
-        let mut out = Vec::with_capacity(views.len());
-        for (i, v) in views.iter().enumerate() {
-            out.push(self.complete_view(v, i, transfer_follows)?);
-            progress(i + 1, views.len());
+        if !self.host_only(transfer_follows) {
+            let mut out = Vec::with_capacity(views.len());
+            for (i, v) in views.iter().enumerate() {
+                out.push(self.complete_view(v, i, transfer_follows)?);
+                progress(i + 1, views.len());
+            }
+            return Ok(out);
         }
-        Ok(out)
+        let mut out: Vec<Option<Result<Completed>>> = (0..views.len()).map(|_| None).collect();
+        for_each_item(&mut out, progress, |i, c| *c = Some(self.complete_view(&views[i], i, transfer_follows)));
+        out.into_iter().map(|c| c.expect("every view ran")).collect()
+    }
+
+    /// Whether `complete_view` runs on the host alone (see `complete_views`).
+    fn host_only(&self, texture_later: bool) -> bool {
+        self.depth_guidance
+            && matches!(self.prior, DepthPrior::BuiltIn)
+            && self.refiner.is_none()
+            && match self.inpainter {
+                Inpainter::Harmonic => true,
+                Inpainter::Exemplar(_) => texture_later,
+                Inpainter::Onnx(_) | Inpainter::Provided { .. } => false,
+            }
     }
 
     /// Stage 3b, photo-consistent hole depth (`photo_depth`): corrects the completed depth of
@@ -274,7 +297,7 @@ impl Completer {
     /// fill and see-through pixels) is inpainted again, now from those colors too. Returns, per
     /// view, the pixels transferred from photos.
     pub fn transfer_colors(
-        &mut self,
+        &self,
         cameras: &[Camera],
         sources: &[SourceView],
         holes: &[&[bool]],
@@ -340,13 +363,13 @@ impl Completer {
     }
 
     /// Completes one view, its texture included.
-    pub fn complete(&mut self, v: &ViewInputs, index: usize) -> Result<Completed> {
+    pub fn complete(&self, v: &ViewInputs, index: usize) -> Result<Completed> {
         self.complete_view(v, index, false)
     }
 
     /// Completes one view; with `texture_later` the exemplar's texture is left to the color
     /// transfer (`complete_views`).
-    fn complete_view(&mut self, v: &ViewInputs, index: usize, texture_later: bool) -> Result<Completed> {
+    fn complete_view(&self, v: &ViewInputs, index: usize, texture_later: bool) -> Result<Completed> {
         let (w, h) = (v.width, v.height);
         // The first fill serves the ablation without depth, a learned depth prior (which reads the
         // image) and the learned or provided inpaintings (kept as they are); the built-in ones
@@ -421,7 +444,7 @@ impl Completer {
             }
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => rgb,
         };
-        let depth = match &mut self.refiner {
+        let depth = match &self.refiner {
             Some(den) => diffusion::masked_ddim(
                 &anchored.depth,
                 &fill,
@@ -464,7 +487,7 @@ impl Completer {
     /// intrinsics); `avoid` pixels stay but lend the exemplar fill no texture.
     #[allow(clippy::too_many_arguments)]
     pub fn inpaint_again(
-        &mut self,
+        &self,
         index: usize,
         image: &[f32],
         fill: &[bool],
