@@ -31,7 +31,7 @@ layout(push_constant) uniform Push {
     uint radius;      // largest random-search radius
     float label_penalty;  // added to the distance of a source on another surface
     float depth_weight;   // times ln(source / target disparity)^2, added to the distance (0: off)
-    uint pad;
+    uint dist_known;      // nnf pass: dist_in holds each target's distance to its nnf_in source
     Floats disparity;     // per pixel, 1 / depth (the hole's completed); 0 = unknown
 };
 

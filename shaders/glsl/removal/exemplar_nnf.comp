@@ -18,7 +18,9 @@ void main() {
     uint best = nnf_in.v[p];
     ivec2 bs = ivec2(best % width, best / width);
     TargetPatch tp = target_patch(t, t_label);
-    float best_d = patch_distance(tp, bs, 1e30);
+    // the previous pass of a round left the distance of this source on the same image: the very
+    // sum this would compute (a kept candidate's sum never stops early)
+    float best_d = dist_known != 0u ? dist_in.v[p] : patch_distance(tp, bs, 1e30);
     const ivec2 dirs[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
     for (int i = 0; i < 4; i++) {
         ivec2 q = t + dirs[i] * int(step);

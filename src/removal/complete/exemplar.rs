@@ -72,7 +72,8 @@ struct ExemplarPush {
     radius: u32,
     label_penalty: f32,
     depth_weight: f32,
-    pad: u32,
+    /// 1 where dist_in holds every target's distance to its nnf_in source on the current image.
+    dist_known: u32,
     disparity: u64,
 }
 
@@ -385,47 +386,48 @@ impl ExemplarFill {
             true => None,
             false => Some(Buffer::from_slice(gpu, "exemplar disparity", &level.disparity)?),
         };
-        let push = |from: usize, list: &Buffer, count: usize, step: u32, seed: u32, scale: f32| ExemplarPush {
-            image: image.address(),
-            info: info_b.address(),
-            nnf_in: fields[from].address(),
-            dist_in: dists[from].address(),
-            nnf_out: fields[1 - from].address(),
-            dist_out: dists[1 - from].address(),
-            targets: list.address(),
-            sources: sources_b.address(),
-            count: count as u32,
-            num_sources: sources.len() as u32,
-            width: level.w as u32,
-            height: level.h as u32,
-            step,
-            seed,
-            radius: if coarsest { level.w.max(level.h) as u32 / 2 } else { FINER_RADIUS },
-            label_penalty: scale,
-            depth_weight: if disparity.is_some() { DEPTH_WEIGHT } else { 0.0 },
-            pad: 0,
-            disparity: disparity.as_ref().map_or(0, |b| b.address()),
-        };
+        let push =
+            |from: usize, list: &Buffer, count: usize, step: u32, seed: u32, scale: f32, known: bool| ExemplarPush {
+                image: image.address(),
+                info: info_b.address(),
+                nnf_in: fields[from].address(),
+                dist_in: dists[from].address(),
+                nnf_out: fields[1 - from].address(),
+                dist_out: dists[1 - from].address(),
+                targets: list.address(),
+                sources: sources_b.address(),
+                count: count as u32,
+                num_sources: sources.len() as u32,
+                width: level.w as u32,
+                height: level.h as u32,
+                step,
+                seed,
+                radius: if coarsest { level.w.max(level.h) as u32 / 2 } else { FINER_RADIUS },
+                label_penalty: scale,
+                depth_weight: if disparity.is_some() { DEPTH_WEIGHT } else { 0.0 },
+                dist_known: known as u32,
+                disparity: disparity.as_ref().map_or(0, |b| b.address()),
+            };
         let mut rec = Recorder::new(gpu)?;
         let mut current = 0;
         if !coarsest {
             // the upsampled field votes the first estimate of this level (all distances 0: equal weights)
             rec.dispatch(
                 &self.vote,
-                &push(current, &holes_b, holes.len(), 0, 0, VOTE_SIGMA2),
+                &push(current, &holes_b, holes.len(), 0, 0, VOTE_SIGMA2, false),
                 dispatch_1d(holes.len().div_ceil(64) as u32),
             );
         }
         let mut pass = 0u64;
         for _ in 0..if coarsest { ROUNDS_COARSEST } else { ROUNDS_FINER } {
-            for &step in &STEPS {
+            for (pass_in_round, &step) in STEPS.iter().enumerate() {
                 // the pass's hash seed: the run's seed folded to 32 bits, mixed with the pass number
                 let pass32 = pass as u32;
                 let seed =
                     (self.seed as u32 ^ (pass32 << 20)) ^ (self.seed >> 32) as u32 ^ pass32.wrapping_mul(0x9e37_79b9);
                 rec.dispatch(
                     &self.nnf,
-                    &push(current, &targets_b, targets.len(), step, seed, LABEL_PENALTY),
+                    &push(current, &targets_b, targets.len(), step, seed, LABEL_PENALTY, pass_in_round > 0),
                     dispatch_1d(targets.len().div_ceil(64) as u32),
                 );
                 current = 1 - current;
@@ -433,7 +435,7 @@ impl ExemplarFill {
             }
             rec.dispatch(
                 &self.vote,
-                &push(current, &holes_b, holes.len(), 0, 0, VOTE_SIGMA2),
+                &push(current, &holes_b, holes.len(), 0, 0, VOTE_SIGMA2, false),
                 dispatch_1d(holes.len().div_ceil(64) as u32),
             );
         }
