@@ -116,6 +116,17 @@ fn conformance_more_than_32_features_and_16() {
     check(&scene, &test_camera(48, 40), Some((&f, 16)), [1.0, 1.0, 1.0], "16 features");
 }
 
+/// One feature per Gaussian blends inside the color pass (blend.comp's ONE_FEATURE), not in
+/// blend_features: the same reference, and a 0/1 marker as the removal's hole masks use it.
+#[test]
+fn conformance_one_feature_blends_with_the_color() {
+    let scene = random_scene(13, 1, SceneMix::default());
+    let f = random_features(14, scene.len(), 1);
+    check(&scene, &test_camera(75, 53), Some((&f, 1)), [0.2, 0.1, 0.0], "1 feature");
+    let marker: Vec<f32> = (0..scene.len()).map(|i| (i % 3 == 0) as u8 as f32).collect();
+    check(&scene, &test_camera(64, 48), Some((&marker, 1)), [0.0, 0.0, 0.0], "0/1 marker");
+}
+
 #[test]
 fn conformance_dense_opaque_scene_terminates_early() {
     // many opaque Gaussians: most pixels reach T < 1e-4 and stop early

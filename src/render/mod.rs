@@ -177,6 +177,9 @@ pub struct Rasterizer {
     emit: ComputePipeline,
     ranges: ComputePipeline,
     blend: ComputePipeline,
+    /// blend.comp with its one-feature pass (ONE_FEATURE = 1), built on first use.
+    blend_one_feature: SpecializedPipelines,
+    blend_rows: u32,
     blend_features: FeaturePipelines,
     sort: RadixSort,
     scan: scan::PrefixScan,
@@ -250,6 +253,8 @@ impl Rasterizer {
             emit: ComputePipeline::new(gpu, "emit_intersections", shaders::EMIT_INTERSECTIONS)?,
             ranges: ComputePipeline::new(gpu, "tile_ranges", shaders::TILE_RANGES)?,
             blend: ComputePipeline::specialized(gpu, "blend", shaders::BLEND, &[rows, 16 / rows])?,
+            blend_one_feature: SpecializedPipelines::new("blend", shaders::BLEND),
+            blend_rows: rows,
             blend_features: FeaturePipelines::new("blend_features", shaders::BLEND_FEATURES, layout.forward_rows),
             sort: RadixSort::new(gpu)?,
             scan: scan::PrefixScan::new(gpu)?,
@@ -370,7 +375,8 @@ impl Rasterizer {
         }
         self.reserve_gaussians(n)?;
         self.reserve_image(width, height, feature_dim)?;
-        self.blend_features.prepare(&self.gpu, feature_dim)?;
+        // (one feature blends in blend.comp: no feature pipeline to build)
+        self.blend_features.prepare(&self.gpu, if feature_dim == 1 { 0 } else { feature_dim })?;
         let tiles_x = width.div_ceil(TILE);
         let tiles_y = height.div_ceil(TILE);
         let num_tiles = tiles_x * tiles_y;
@@ -432,14 +438,21 @@ impl Rasterizer {
             );
             rec.mark("tile ranges");
         }
-        rec.dispatch(&self.blend, &push, dispatch_1d(num_tiles));
-        rec.mark_moved("blend", moved::blend(m, width * height, num_tiles));
-        for (offset, channels) in FeaturePipelines::passes(feature_dim) {
-            let push = ParamsPushU32 { params: push.params, value: offset, pad: 0 };
-            rec.dispatch(self.blend_features.get(channels), &push, dispatch_1d(num_tiles));
-        }
-        if feature_dim > 0 {
-            rec.mark("blend features");
+        if feature_dim == 1 {
+            // the one feature rides along with the color (blend.comp, ONE_FEATURE)
+            let rows = self.blend_rows;
+            rec.dispatch(self.blend_one_feature.get(&self.gpu, &[rows, 16 / rows, 1])?, &push, dispatch_1d(num_tiles));
+            rec.mark_moved("blend", moved::blend(m, width * height, num_tiles));
+        } else {
+            rec.dispatch(&self.blend, &push, dispatch_1d(num_tiles));
+            rec.mark_moved("blend", moved::blend(m, width * height, num_tiles));
+            for (offset, channels) in FeaturePipelines::passes(feature_dim) {
+                let push = ParamsPushU32 { params: push.params, value: offset, pad: 0 };
+                rec.dispatch(self.blend_features.get(channels), &push, dispatch_1d(num_tiles));
+            }
+            if feature_dim > 0 {
+                rec.mark("blend features");
+            }
         }
         Ok((Frame { params, num_intersections: m, timings }, rec))
     }

@@ -8,6 +8,9 @@
 // blend_weight, whatever ROWS is. Gaussians reach the lanes by subgroup broadcast, not shared memory:
 // on lavapipe a shared load is a loop over the lanes, a broadcast one register move (trained 31.5k
 // scene at 256x192: 210 -> 130 ms).
+// With ONE_FEATURE = 1 (a scene with one feature per Gaussian, such as the removal's marker of the
+// removed Gaussians) the feature is blended here too, with the very sums of blend_features.comp,
+// instead of a second walk over the tile lists (on lavapipe that walk was 40 % of a render).
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
 #extension GL_KHR_shader_subgroup_ballot : require
@@ -17,6 +20,7 @@
 
 layout(constant_id = 0) const uint ROWS = 1;
 layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
+layout(constant_id = 2) const uint ONE_FEATURE = 0;
 layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; };
 
@@ -28,7 +32,7 @@ void main() {
     uvec2 range = UVec2View(p.tile_ranges).v[tile];
     uint start = range.x, end = range.y;
     vec2 pixel[ROWS];
-    float T[ROWS], D[ROWS], W[ROWS];
+    float T[ROWS], D[ROWS], W[ROWS], F[ROWS];
     vec3 C[ROWS];
     uint n_contrib[ROWS];
     bool finished[ROWS];
@@ -40,6 +44,7 @@ void main() {
         C[r] = vec3(0.0);
         D[r] = 0.0;
         W[r] = 0.0;
+        F[r] = 0.0;
         n_contrib[r] = start;
         finished[r] = !(pix.x < p.width && pix.y < p.height);
         lane_finished = lane_finished && finished[r];
@@ -56,12 +61,14 @@ void main() {
         vec2 my_xy = vec2(0.0);
         vec4 my_co = vec4(0.0), my_cd = vec4(0.0);
         float my_reach = -1.0;  // past the end: reaches no row
+        float my_f = 0.0;
         if (k < end) {
             uint g = p.isect_gauss.v[k];
             my_xy = Vec2View(p.xy).v[g];
             my_co = Vec4View(p.conic_opacity).v[g];
             my_cd = vec4(Vec3View(p.color).v[g], p.depth.v[g]);
             my_reach = row_reach(my_co);
+            if (ONE_FEATURE != 0) my_f = p.features.v[g];
         }
         uint count = min(lanes, end - batch);
         for (uint j = 0; j < count; j++) {
@@ -69,6 +76,7 @@ void main() {
             vec4 co = subgroupBroadcast(my_co, j);
             float reach = subgroupBroadcast(my_reach, j);
             vec4 cd = subgroupBroadcast(my_cd, j);
+            float f = ONE_FEATURE != 0 ? subgroupBroadcast(my_f, j) : 0.0;
             lane_finished = true;
             for (uint r = 0; r < ROWS; r++) {
                 // the rows of a subgroup's lanes are the same on a CPU driver, so this skip is uniform there
@@ -78,6 +86,7 @@ void main() {
                         C[r] += w * cd.rgb;
                         D[r] += w * cd.w;
                         W[r] += w;
+                        if (ONE_FEATURE != 0) F[r] += w * f;
                         n_contrib[r] = batch + j + 1;
                     }
                 }
@@ -99,5 +108,6 @@ void main() {
         p.out_expected_depth.v[pi] = D[r] / max(W[r], 1e-10);
         p.out_final_t.v[pi] = T[r];
         p.out_n_contrib.v[pi] = n_contrib[r];
+        if (ONE_FEATURE != 0) p.out_features.v[pi] = F[r];
     }
 }
