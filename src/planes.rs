@@ -150,6 +150,12 @@ pub fn fit_planes(
         pts.iter().copied().filter(|&i| p.residual(i, w, disp[i] as f64) <= tol).collect()
     };
     while planes.len() < max_planes && pts.len() >= min_inliers.max(3) {
+        // the points' centers and disparities side by side: a trial's count is then a loop over
+        // flat arrays, without the index's division per point (Plane::residual's arithmetic, so
+        // the same counts)
+        let xs: Vec<f64> = pts.iter().map(|&i| center(i, w).0).collect();
+        let ys: Vec<f64> = pts.iter().map(|&i| center(i, w).1).collect();
+        let ds: Vec<f64> = pts.iter().map(|&i| disp[i] as f64).collect();
         let mut best: Option<(usize, Plane)> = None;
         for _ in 0..RANSAC_TRIALS {
             let pick = [rng.below(pts.len()), rng.below(pts.len()), rng.below(pts.len())];
@@ -165,7 +171,7 @@ pub fn fit_planes(
             }
             let Some([a, b, c]) = solve(m, r) else { continue };
             let p = Plane { a, b, c };
-            let n = pts.iter().filter(|&&i| p.residual(i, w, disp[i] as f64) <= tol).count();
+            let n = (0..pts.len()).filter(|&k| (p.disparity(xs[k], ys[k]) - ds[k]).abs() / ds[k] <= tol).count();
             if best.as_ref().is_none_or(|(bn, _)| n > *bn) {
                 best = Some((n, p));
             }
