@@ -5,7 +5,7 @@
 mod common;
 
 use cogeo::image_ops::Rect;
-use cogeo::removal::refine::{refine_window, window_camera};
+use cogeo::removal::refine::{refine_window, seen_by_any, window_camera};
 use cogeo::render::{RenderSettings, SceneRenderer};
 use common::{random_scene, test_camera, SceneMix};
 
@@ -60,4 +60,31 @@ fn the_window_holds_the_hole_and_the_patch_the_view_sees() {
     let r = refine_window(&camera, &hole, &[at(2, 57)], 5).unwrap();
     assert_eq!((r.x0, r.y0, r.x1, r.y1), (0, 15, 45, 60), "clamped to the image");
     assert!(refine_window(&camera, &vec![false; w * h], &[behind, outside], 5).is_none());
+}
+
+/// The refinement leaves out the Gaussians no view shows (`seen_by_any`): without them every
+/// view renders bit for bit as with the whole scene, here windows that see part of a scene whose
+/// Gaussians are huge, tiny, behind the camera and far off to the side.
+#[test]
+fn the_gaussians_no_window_shows_change_no_pixel() {
+    let gpu = common::gpu();
+    let scene = random_scene(23, 1, SceneMix { normal: 300, tiny: 20, huge: 6, behind: 10, faint: 20, opaque: 30 });
+    let camera = test_camera(96, 72);
+    let windows = [Rect { x0: 4, y0: 6, x1: 30, y1: 28 }, Rect { x0: 60, y0: 40, x1: 90, y1: 70 }];
+    let cameras: Vec<_> = windows.iter().map(|&r| window_camera(&camera, r)).collect();
+    let seen = seen_by_any(&scene, &cameras, 0.005);
+    let kept = seen.iter().filter(|&&s| s).count();
+    assert!(kept > 20 && kept + 100 < scene.len(), "{kept} of {} seen: the test needs both kinds", scene.len());
+    let part = scene.subset(&seen);
+    let settings = RenderSettings { background: [0.3, 0.1, 0.5], ..Default::default() };
+    let (mut all, mut some) =
+        (SceneRenderer::new(&gpu, &scene, None).unwrap(), SceneRenderer::new(&gpu, &part, None).unwrap());
+    for cam in &cameras {
+        let (a, b) = (all.render(cam, &settings).unwrap(), some.render(cam, &settings).unwrap());
+        assert!(a.alpha.iter().filter(|&&x| x > 0.1).count() > 100, "the window must show the scene");
+        for (name, x, y) in [("rgb", &a.rgb, &b.rgb), ("alpha", &a.alpha, &b.alpha), ("depth", &a.depth, &b.depth)] {
+            let differ = x.iter().zip(y.iter()).filter(|(p, q)| p.to_bits() != q.to_bits()).count();
+            assert_eq!(differ, 0, "{name}: {differ} values differ without the unseen Gaussians");
+        }
+    }
 }

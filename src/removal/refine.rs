@@ -14,6 +14,7 @@
 
 use crate::gpu::Gpu;
 use crate::image_ops::{bounding_box, including, Rect};
+use crate::render::{reference, RenderSettings};
 use crate::scene::dataset::{Dataset, View};
 use crate::scene::{Camera, GaussianScene};
 use crate::train::trainer::{Frozen, TrainConfig, Trainer};
@@ -114,6 +115,8 @@ pub struct RefineReport {
     /// windows (`refine_window`) unless the whole views were refined.
     pub psnr_before: f64,
     pub psnr_after: f64,
+    /// The Gaussians some view shows, the ones refined (`seen_by_any`).
+    pub gaussians_refined: usize,
 }
 
 /// The part of `camera`'s view the refinement needs: the bounding box of its `hole` and of the
@@ -191,7 +194,11 @@ pub fn refine(
         shape_lr_gain: cfg.shape_lr_gain,
         ..Default::default()
     };
-    let mut t = Trainer::new(gpu, &data, scene, tcfg)?;
+    // only the Gaussians some view shows: the rest get no gradient (see `seen_by_any`)
+    let seen = seen_by_any(scene, cameras, 0.5 * RenderSettings::default().near as f64);
+    let all = seen.iter().all(|&s| s) || !seen.iter().any(|&s| s);
+    let part = if all { None } else { Some(scene.subset(&seen)) };
+    let mut t = Trainer::new(gpu, &data, part.as_ref().unwrap_or(scene), tcfg)?;
     // the bands the scene learnt, from the first step. A scene trained for fewer than 1000
     // iterations has learnt only the DC band; rendering and stepping its zero bands as well made a
     // refinement iteration dearer than a training one, and 150 iterations from zero added nothing
@@ -214,12 +221,44 @@ pub fn refine(
         progress(t.step);
     }
     let psnr_after = t.mean_psnr(&data.train)?;
-    let mut out = t.download_scene()?;
+    let refined = t.download_scene()?;
     // no densification: Gaussians keep their order, so the extra properties (labels) carry over
-    if out.len() == scene.len() {
-        out.extras = scene.extras.clone();
-    }
-    Ok((out, RefineReport { iters: cfg.iters, frozen_iters, psnr_before, psnr_after }))
+    let out = match part {
+        Some(_) => {
+            let mut out = scene.clone();
+            out.set_subset(&seen, &refined);
+            out
+        }
+        None if refined.len() == scene.len() => GaussianScene { extras: scene.extras.clone(), ..refined },
+        None => refined,
+    };
+    let shown = seen.iter().filter(|&&s| s).count();
+    Ok((out, RefineReport { iters: cfg.iters, frozen_iters, psnr_before, psnr_after, gaussians_refined: shown }))
+}
+
+/// The Gaussians any of `cameras` can show: a superset of what the renderer bins into their
+/// images (each Gaussian's pixel box as project.comp draws it, at opacity 1 and grown by 1 % and
+/// 2 pixels; in front of `near`). Any other Gaussian touches no pixel of any view, so it gets no
+/// gradient, its Adam moments stay zero and it never moves, and it adds nothing to any render
+/// (the renderer's sorts are stable, so the others keep their order): refining without it is
+/// the same refinement, less its projection, sorting and Adam step every iteration. Refining
+/// views over windows around the holes leaves out most of a scene.
+pub fn seen_by_any(scene: &GaussianScene, cameras: &[Camera], near: f64) -> Vec<bool> {
+    // 2 ln(255) (binning_q_threshold at opacity 1, tile_binning.glsl), rounded up
+    const Q_MAX: f64 = 12.0;
+    (0..scene.len())
+        .map(|i| {
+            cameras.iter().any(|cam| {
+                let Some(g) = reference::project(scene, i, cam, near, 0) else { return false };
+                let rx = (Q_MAX * g.cov2d[0]).sqrt() * 1.01 + 2.0;
+                let ry = (Q_MAX * g.cov2d[2]).sqrt() * 1.01 + 2.0;
+                g.xy[0] + rx >= 0.0
+                    && g.xy[1] + ry >= 0.0
+                    && g.xy[0] - rx <= cam.width as f64
+                    && g.xy[1] - ry <= cam.height as f64
+            })
+        })
+        .collect()
 }
 
 #[cfg(test)]

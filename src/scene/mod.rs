@@ -180,6 +180,20 @@ impl GaussianScene {
         }
     }
 
+    /// Writes the parameters of `part` (a `subset(keep)` of this scene, changed since) back over
+    /// the Gaussians `keep` selects; normals and extra properties stay.
+    pub fn set_subset(&mut self, keep: &[bool], part: &GaussianScene) {
+        let k = self.sh_coeffs() * 3;
+        assert_eq!(part.sh_degree, self.sh_degree, "set_subset: SH degrees differ");
+        for (j, i) in (0..self.len()).filter(|&i| keep[i]).enumerate() {
+            self.means[i] = part.means[j];
+            self.log_scales[i] = part.log_scales[j];
+            self.quats[i] = part.quats[j];
+            self.opacity_logits[i] = part.opacity_logits[j];
+            self.sh[i * k..(i + 1) * k].copy_from_slice(&part.sh[j * k..(j + 1) * k]);
+        }
+    }
+
     /// Appends `other`'s Gaussians (same SH degree). Extra properties `other` lacks get 0 for its
     /// Gaussians; properties only `other` has are dropped.
     pub fn append(&mut self, other: &GaussianScene) -> Result<()> {
