@@ -42,7 +42,6 @@ impl DepthScale {
 pub const SCALE_RANGE: f64 = 0.05;
 /// Candidates either side of 1 (0.1 % apart).
 const SCALE_STEPS: i32 = 50;
-
 /// Fewer consistent pixels than this leave the depth as it is.
 const MIN_PIXELS: usize = 64;
 /// The per-pixel search: relative range either side of the hole's factor, candidates either
