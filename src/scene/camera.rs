@@ -104,7 +104,11 @@ impl Camera {
     /// Where world point `p` lands in the image: (x, y) in pixels and its view depth; None when it
     /// is behind the camera or outside the image.
     pub fn project_to_image(&self, p: [f64; 3]) -> Option<(f64, f64, f64)> {
-        let pc = self.to_camera(p);
+        self.camera_point_to_image(self.to_camera(p))
+    }
+
+    /// `project_to_image` of a point already in camera coordinates.
+    pub fn camera_point_to_image(&self, pc: [f64; 3]) -> Option<(f64, f64, f64)> {
         if pc[2] <= 1e-6 {
             return None;
         }

@@ -76,14 +76,10 @@ impl SeenPixels<'_> {
         let range = self.starts[i]..self.starts[i + 1];
         for (&j, [a, b]) in self.views[range.clone()].iter().zip(&self.lines[range]) {
             let s = &self.sources[j as usize];
-            // Camera::project_to_image of the line's point
             let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
-            if pc[2] <= 1e-6 {
-                continue;
-            }
-            let (x, y) = (s.camera.fx * pc[0] / pc[2] + s.camera.cx, s.camera.fy * pc[1] / pc[2] + s.camera.cy);
+            let Some((x, y, _)) = s.camera.camera_point_to_image(pc) else { continue };
             let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
-            if !(x >= 0.0 && y >= 0.0 && x < sw as f64 && y < sh as f64) || s.hole[y as usize * sw + x as usize] {
+            if s.hole[y as usize * sw + x as usize] {
                 continue;
             }
             let rgb = sample_bilinear_rgb(s.photo, sw, sh, x, y);

@@ -221,16 +221,17 @@ impl Surfaces {
 
     /// `labels` at the one pixel `i` (row width `w`) whose depth is `depth`.
     pub fn label_at(&self, i: usize, w: usize, depth: f32) -> u8 {
-        self.member_within(i, w, 1.0 / depth as f64, LABEL_TOLERANCE).map_or(0, |s| s as u8 + 1)
+        self.label_within(i, w, depth, LABEL_TOLERANCE)
     }
 
     /// Per pixel, 1 + the plane within `tolerance` (relative disparity) of the depth, or 0.
     fn labels_within(&self, depth: &[f32], w: usize, tolerance: f64) -> Vec<u8> {
-        depth
-            .iter()
-            .enumerate()
-            .map(|(i, &d)| self.member_within(i, w, 1.0 / d as f64, tolerance).map_or(0, |s| s as u8 + 1))
-            .collect()
+        depth.iter().enumerate().map(|(i, &d)| self.label_within(i, w, d, tolerance)).collect()
+    }
+
+    /// `labels_within` at the one pixel `i`.
+    fn label_within(&self, i: usize, w: usize, depth: f32, tolerance: f64) -> u8 {
+        self.member_within(i, w, 1.0 / depth as f64, tolerance).map_or(0, |s| s as u8 + 1)
     }
 }
 
