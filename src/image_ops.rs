@@ -290,6 +290,59 @@ pub fn box_sum(img: &[f32], w: usize, h: usize, channels: usize, r: usize) -> Ve
     out
 }
 
+/// Maxima of `img` (`channels` planes of `w` x `h`) over the (2r+1)^2 window around each pixel,
+/// the window cut at the borders; `f32::NEG_INFINITY` marks a missing value (and is the result
+/// where the window holds none). Minima: negate in and out. Linear in the pixels whatever `r`.
+pub fn box_max(img: &[f32], w: usize, h: usize, channels: usize, r: usize) -> Vec<f32> {
+    let n = w * h;
+    let mut rows = vec![0f32; channels * n];
+    for c in 0..channels {
+        for y in 0..h {
+            let at = c * n + y * w..c * n + (y + 1) * w;
+            sliding_max(&img[at.clone()], r, &mut rows[at]);
+        }
+    }
+    let mut out = vec![0f32; channels * n];
+    let (mut column, mut result) = (vec![0f32; h], vec![0f32; h]);
+    for c in 0..channels {
+        for x in 0..w {
+            for y in 0..h {
+                column[y] = rows[c * n + y * w + x];
+            }
+            sliding_max(&column, r, &mut result);
+            for y in 0..h {
+                out[c * n + y * w + x] = result[y];
+            }
+        }
+    }
+    out
+}
+
+/// The maximum over [i - r, i + r] of `v`, for each i, cut at the ends (van Herk / Gil-Werman):
+/// padded with r missing values at each end, every window is 2r+1 long and spans at most two
+/// blocks of that length, so its maximum is that of the running maximum of the first block from
+/// the right (from the window's start) and of the second from the left (up to its end).
+fn sliding_max(v: &[f32], r: usize, out: &mut [f32]) {
+    let k = 2 * r + 1;
+    let mut padded = vec![f32::NEG_INFINITY; v.len() + 2 * r];
+    padded[r..r + v.len()].copy_from_slice(v);
+    let m = padded.len();
+    let (mut from_left, mut from_right) = (padded.clone(), padded);
+    for i in 1..m {
+        if i % k != 0 {
+            from_left[i] = from_left[i].max(from_left[i - 1]);
+        }
+    }
+    for i in (0..m - 1).rev() {
+        if i % k != k - 1 {
+            from_right[i] = from_right[i].max(from_right[i + 1]);
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = from_right[i].max(from_left[i + 2 * r]);
+    }
+}
+
 /// Concatenates planar RGB images of one height side by side, 2-pixel white gaps, into RGB8.
 pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>) {
     let gap = 2;
@@ -341,6 +394,32 @@ mod tests {
                 assert_eq!(s[y * w + x], (xs.clone().count() * ys.clone().count()) as f32);
                 let want: usize = ys.flat_map(|v| xs.clone().map(move |u| v * w + u)).sum();
                 assert_eq!(s[w * h + y * w + x], want as f32);
+            }
+        }
+    }
+
+    #[test]
+    fn box_max_is_the_maximum_over_the_window_cut_at_the_borders() {
+        // against the window scanned directly, with missing values, for radii from 0 to past the image
+        let (w, h) = (13usize, 9usize);
+        let mut rng = crate::rng::Rng::new(7);
+        let img: Vec<f32> = (0..2 * w * h)
+            .map(|_| if rng.uniform() < 0.6 { f32::NEG_INFINITY } else { rng.uniform() as f32 })
+            .collect();
+        for r in [0usize, 1, 2, 3, 5, 14] {
+            let got = box_max(&img, w, h, 2, r);
+            for c in 0..2 {
+                for y in 0..h {
+                    for x in 0..w {
+                        let (xs, ys) =
+                            (x.saturating_sub(r)..=(x + r).min(w - 1), y.saturating_sub(r)..=(y + r).min(h - 1));
+                        let img = &img;
+                        let want = ys
+                            .flat_map(|v| xs.clone().map(move |u| img[c * w * h + v * w + u]))
+                            .fold(f32::NEG_INFINITY, f32::max);
+                        assert_eq!(got[c * w * h + y * w + x], want, "r {r} channel {c} ({x}, {y})");
+                    }
+                }
             }
         }
     }
