@@ -50,32 +50,33 @@ struct TargetPatch {
     uint label;
     float disparity;   // 1 / depth at t (0 = unknown, or no depth term)
 };
+// The invocation's target patch: a global, not a parameter, so that no call copies its 160 words.
+TargetPatch tp;
 
-TargetPatch target_patch(ivec2 t, uint t_label) {
-    TargetPatch p;
+// Loads the target patch of t into `tp`.
+void load_target_patch(ivec2 t, uint t_label) {
     uint n = width * height;
-    p.t = t;
-    p.label = t_label;
-    p.used = 0;
-    p.row_inside = 0u;
+    tp.t = t;
+    tp.label = t_label;
+    tp.used = 0;
+    tp.row_inside = 0u;
     [[unroll]] for (int dy = -RADIUS; dy <= RADIUS; dy++) {
         int ty = t.y + dy;
         bool row_in = ty >= 0 && ty < int(height);
-        p.row_inside |= row_in ? 1u << (dy + RADIUS) : 0u;
+        tp.row_inside |= row_in ? 1u << (dy + RADIUS) : 0u;
         uint row = 0u;
         [[unroll]] for (int dx = -RADIUS; dx <= RADIUS; dx++) {
             int tx = t.x + dx;
             uint a = uint(clamp(ty, 0, int(height) - 1)) * width + uint(clamp(tx, 0, int(width) - 1));
             bool counts = row_in && tx >= 0 && tx < int(width) && (t_label == 0 || label_of(info.v[a]) == t_label);
             row |= counts ? 1u << (dx + RADIUS) : 0u;
-            p.used += counts ? 1 : 0;
+            tp.used += counts ? 1 : 0;
             int k = 3 * ((dy + RADIUS) * SIDE + dx + RADIUS);
-            [[unroll]] for (int c = 0; c < 3; c++) p.rgb[k + c] = counts ? image.v[uint(c) * n + a] : 0.0;
+            [[unroll]] for (int c = 0; c < 3; c++) tp.rgb[k + c] = counts ? image.v[uint(c) * n + a] : 0.0;
         }
-        p.rows[dy + RADIUS] = row;
+        tp.rows[dy + RADIUS] = row;
     }
-    p.disparity = depth_weight > 0.0 ? disparity.v[uint(t.y) * width + uint(t.x)] : 0.0;
-    return p;
+    tp.disparity = depth_weight > 0.0 ? disparity.v[uint(t.y) * width + uint(t.x)] : 0.0;
 }
 
 // Mean squared RGB difference between the target patch and the patch at source s over the target
@@ -85,30 +86,30 @@ TargetPatch target_patch(ivec2 t, uint t_label) {
 // estimate best).
 // Stops early (returning a value above `bound`) once the partial sum already exceeds `bound` for
 // every pixel the patch could still count: the candidate cannot win.
-float patch_distance(TargetPatch p, ivec2 s, float bound) {
+float patch_distance(ivec2 s, float bound) {
     uint n = width * height;
     float acc = 0.0;
     float stop = bound * float(3 * SIDE * SIDE);
     [[unroll]] for (int dy = -RADIUS; dy <= RADIUS; dy++) {
-        if ((p.row_inside & (1u << (dy + RADIUS))) == 0u) continue;
-        uint row = p.rows[dy + RADIUS];
+        if ((tp.row_inside & (1u << (dy + RADIUS))) == 0u) continue;
+        uint row = tp.rows[dy + RADIUS];
         uint b0 = uint(s.y + dy) * width + uint(s.x);  // a source patch is inside the image
         [[unroll]] for (int dx = -RADIUS; dx <= RADIUS; dx++) {
             if ((row & (1u << (dx + RADIUS))) == 0u) continue;
             uint b = uint(int(b0) + dx);
             int k = 3 * ((dy + RADIUS) * SIDE + dx + RADIUS);
             [[unroll]] for (int c = 0; c < 3; c++) {
-                float d = p.rgb[k + c] - image.v[uint(c) * n + b];
+                float d = tp.rgb[k + c] - image.v[uint(c) * n + b];
                 acc += d * d;
             }
         }
         if (acc > stop) return 1e30;
     }
-    float dist = acc / float(3 * max(p.used, 1));
+    float dist = acc / float(3 * max(tp.used, 1));
     uint s_label = label_of(info.v[uint(s.y) * width + uint(s.x)]);
-    if (p.label != 0 && s_label != p.label) dist += label_penalty;
+    if (tp.label != 0 && s_label != tp.label) dist += label_penalty;
     if (depth_weight > 0.0) {
-        float dt = p.disparity, ds = disparity.v[uint(s.y) * width + uint(s.x)];
+        float dt = tp.disparity, ds = disparity.v[uint(s.y) * width + uint(s.x)];
         if (dt > 0.0 && ds > 0.0) {
             float r = log(ds / dt);
             dist += depth_weight * r * r;

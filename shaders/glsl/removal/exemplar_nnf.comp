@@ -17,10 +17,10 @@ void main() {
     uint t_label = label_of(info.v[p]);
     uint best = nnf_in.v[p];
     ivec2 bs = ivec2(best % width, best / width);
-    TargetPatch tp = target_patch(t, t_label);
+    load_target_patch(t, t_label);
     // the previous pass of a round left the distance of this source on the same image: the very
     // sum this would compute (a kept candidate's sum never stops early)
-    float best_d = dist_known != 0u ? dist_in.v[p] : patch_distance(tp, bs, 1e30);
+    float best_d = dist_known != 0u ? dist_in.v[p] : patch_distance(bs, 1e30);
     const ivec2 dirs[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
     for (int i = 0; i < 4; i++) {
         ivec2 q = t + dirs[i] * int(step);
@@ -32,7 +32,7 @@ void main() {
         if (s.x < 0 || s.y < 0 || s.x >= int(width) || s.y >= int(height)) continue;
         uint si = uint(s.y) * width + uint(s.x);
         if ((info.v[si] & SOURCE) == 0 || si == best) continue;
-        float d = patch_distance(tp, s, best_d);
+        float d = patch_distance(s, best_d);
         if (d < best_d) { best_d = d; best = si; bs = s; }
     }
     uint h = pcg_hash(seed ^ pcg_hash(p));
@@ -42,12 +42,12 @@ void main() {
         if (s.x < 0 || s.y < 0 || s.x >= int(width) || s.y >= int(height)) continue;
         uint si = uint(s.y) * width + uint(s.x);
         if ((info.v[si] & SOURCE) == 0 || si == best) continue;
-        float d = patch_distance(tp, s, best_d);
+        float d = patch_distance(s, best_d);
         if (d < best_d) { best_d = d; best = si; bs = s; }
     }
     h = pcg_hash(h);
     uint si = sources.v[h % num_sources];
-    float d = patch_distance(tp, ivec2(si % width, si / width), best_d);
+    float d = patch_distance(ivec2(si % width, si / width), best_d);
     if (d < best_d) { best_d = d; best = si; }
     nnf_out.v[p] = best;
     dist_out.v[p] = best_d;
