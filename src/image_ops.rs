@@ -290,6 +290,30 @@ pub fn box_sum(img: &[f32], w: usize, h: usize, channels: usize, r: usize) -> Ve
     out
 }
 
+/// How many `mask` pixels lie in the (2r+1)^2 window around each pixel, the window cut at the
+/// borders: `box_sum` of the mask, through an integral image (linear whatever `r`).
+pub fn box_count(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<u32> {
+    // integral[(y + 1) * (w + 1) + x + 1] = the mask pixels in [0, x] x [0, y]
+    let mut integral = vec![0u32; (w + 1) * (h + 1)];
+    for y in 0..h {
+        let mut row = 0;
+        for x in 0..w {
+            row += mask[y * w + x] as u32;
+            integral[(y + 1) * (w + 1) + x + 1] = integral[y * (w + 1) + x + 1] + row;
+        }
+    }
+    let mut out = vec![0u32; w * h];
+    for y in 0..h {
+        let (y0, y1) = (y.saturating_sub(r), (y + r + 1).min(h));
+        for x in 0..w {
+            let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(w));
+            let at = |yy: usize, xx: usize| integral[yy * (w + 1) + xx];
+            out[y * w + x] = at(y1, x1) + at(y0, x0) - at(y0, x1) - at(y1, x0);
+        }
+    }
+    out
+}
+
 /// Maxima of `img` (`channels` planes of `w` x `h`) over the (2r+1)^2 window around each pixel,
 /// the window cut at the borders; `f32::NEG_INFINITY` marks a missing value (and is the result
 /// where the window holds none). Minima: negate in and out. Linear in the pixels whatever `r`.
@@ -395,6 +419,19 @@ mod tests {
                 let want: usize = ys.flat_map(|v| xs.clone().map(move |u| v * w + u)).sum();
                 assert_eq!(s[w * h + y * w + x], want as f32);
             }
+        }
+    }
+
+    #[test]
+    fn box_count_is_the_box_sum_of_the_mask() {
+        let (w, h) = (11usize, 7usize);
+        let mut rng = crate::rng::Rng::new(5);
+        let mask: Vec<bool> = (0..w * h).map(|_| rng.uniform() < 0.4).collect();
+        let plane: Vec<f32> = mask.iter().map(|&m| m as u32 as f32).collect();
+        for r in [0usize, 1, 3, 6, 20] {
+            let want = box_sum(&plane, w, h, 1, r);
+            let got = box_count(&mask, w, h, r);
+            assert!(got.iter().zip(&want).all(|(&g, &s)| g as f32 == s), "r {r}");
         }
     }
 
