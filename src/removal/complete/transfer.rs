@@ -106,10 +106,11 @@ pub fn transfer(
             }
         }
     }
-    let span = (w as f64 * OWN_RANGE_SPAN).round().max(1.0) as usize;
-    refuse_outside_own_range(&own, &mut other, w, h, span);
     let radius = (w as f64 * LOCAL_MATCH_SPAN).round().max(1.0) as usize;
     let offset = local_offset(&own, &other, w, h, radius);
+    // after local matching (a refused pixel has no own color, so it never counted in the offset)
+    let span = (w as f64 * OWN_RANGE_SPAN).round().max(1.0) as usize;
+    refuse_outside_own_range(&own, &mut other, &offset, w, h, span);
     let mut out = Transfer { rgb: vec![0.0; 3 * n], found: vec![false; n] };
     for p in 0..n {
         let rgb = match (own[p], other[p]) {
@@ -126,13 +127,15 @@ pub fn transfer(
     out
 }
 
-/// Clears each `other` color with a channel outside [min - OWN_RANGE_MARGIN, max +
-/// OWN_RANGE_MARGIN] of the `own` colors within the (2 `radius` + 1)^2 window around it, where
-/// that window holds at least OWN_RANGE_MIN_PIXELS own colors (elsewhere the own photo says
-/// nothing and the other color stays).
+/// Clears each `other` color that, once matched locally (plus `offset`, planar RGB), has a
+/// channel outside [min - OWN_RANGE_MARGIN, max + OWN_RANGE_MARGIN] of the `own` colors within
+/// the (2 `radius` + 1)^2 window around it, where that window holds at least
+/// OWN_RANGE_MIN_PIXELS own colors (elsewhere the own photo says nothing and the other color
+/// stays). Matched, since a tint between the photos is not another surface.
 fn refuse_outside_own_range(
     own: &[Option<[f64; 3]>],
     other: &mut [Option<[f64; 3]>],
+    offset: &[f32],
     w: usize,
     h: usize,
     radius: usize,
@@ -161,7 +164,8 @@ fn refuse_outside_own_range(
         }
         let outside = (0..3).any(|c| {
             let (lo, hi) = (-extremes[(3 + c) * n + p] as f64, extremes[c * n + p] as f64);
-            rgb[c] < lo - OWN_RANGE_MARGIN || rgb[c] > hi + OWN_RANGE_MARGIN
+            let matched = rgb[c] + offset[c * n + p] as f64;
+            matched < lo - OWN_RANGE_MARGIN || matched > hi + OWN_RANGE_MARGIN
         });
         if outside {
             other[p] = None;
@@ -270,11 +274,18 @@ mod tests {
         other[at(22)] = Some([0.46, 0.47, 0.52]); // within range: kept
         other[at(23)] = Some([0.46, 0.47, 0.60]); // blue above max + margin: refused
         other[at(30)] = Some([0.9, 0.1, 0.1]); // no own pixel within 5: kept
-        refuse_outside_own_range(&own, &mut other, w, h, radius);
+        refuse_outside_own_range(&own, &mut other, &vec![0.0; 3 * w * h], w, h, radius);
         assert_eq!(other[at(3)], Some([0.9, 0.9, 0.9]));
         assert_eq!(other[at(21)], None);
         assert_eq!(other[at(22)], Some([0.46, 0.47, 0.52]));
         assert_eq!(other[at(23)], None);
         assert_eq!(other[at(30)], Some([0.9, 0.1, 0.1]));
+        // matched locally first: a blue tint of 0.1 between the photos, taken off, keeps x = 23
+        let mut tinted = vec![None; w * h];
+        tinted[at(23)] = Some([0.46, 0.47, 0.60]);
+        let mut offset = vec![0f32; 3 * w * h];
+        offset[2 * w * h..].fill(-0.1);
+        refuse_outside_own_range(&own, &mut tinted, &offset, w, h, radius);
+        assert_eq!(tinted[at(23)], Some([0.46, 0.47, 0.60]));
     }
 }
