@@ -142,12 +142,12 @@ fn refuse_outside_own_range(
     radius: usize,
 ) {
     let n = w * h;
-    // planes of own colors (missing: -inf) and of their negations, for the window's max and min
-    let mut planes = vec![f32::NEG_INFINITY; 6 * n];
     let known: Vec<bool> = own.iter().map(|o| o.is_some()).collect();
     if !known.contains(&true) {
         return;
     }
+    // planes of own colors (missing: -inf) and of their negations, for the window's max and min
+    let mut planes = vec![f32::NEG_INFINITY; 6 * n];
     for p in 0..n {
         if let Some(rgb) = own[p] {
             for c in 0..3 {
