@@ -124,7 +124,17 @@ fn view_inputs<'a>(
     hole: &'a [bool],
 ) -> ViewInputs<'a> {
     let (width, height) = (cam.width as usize, cam.height as usize);
-    ViewInputs { width, height, intrinsics: cam.into(), rgb, alpha, expected_depth: depth, fill: hole, hole }
+    ViewInputs {
+        width,
+        height,
+        intrinsics: cam.into(),
+        rgb,
+        alpha,
+        expected_depth: depth,
+        front_depth: None,
+        fill: hole,
+        hole,
+    }
 }
 
 /// Removes the box from the bench ending at x = `bench_end`; at least `top_share` of the hole

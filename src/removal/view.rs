@@ -72,6 +72,7 @@ impl<'a> EditedView<'a> {
             rgb: &m.after_removal.rgb,
             alpha: &m.after_removal.alpha,
             expected_depth: &m.after_removal.depth,
+            front_depth: Some(&m.before.depth),
             fill: &m.fill,
             hole: &m.hole,
         }

@@ -101,6 +101,9 @@ pub struct DepthView<'a> {
     pub render_depth: &'a [f32],
     /// Where the rendered depth is trustworthy for the fit (covered, outside the hole).
     pub valid: &'a [bool],
+    /// Expected depth rendered before removal, if known: the planes continued into the hole lie
+    /// behind it (`Surfaces::behind`), since the removed objects hid only what lay behind them.
+    pub front_depth: Option<&'a [f32]>,
 }
 
 impl DepthPrior {
@@ -153,7 +156,8 @@ impl DepthPrior {
                     let near = surfaces.refit_near(&disparity, &known, &region, w, h);
                     let flanks = flanking_at(&near.flank_labels(&known_depth, w), &unknown, &part, w, h);
                     for (&i, &flank) in part.iter().zip(&flanks) {
-                        if let Some((_, d)) = near.visible_among(i, w, flank) {
+                        let behind = v.front_depth.map_or(u32::MAX, |f| near.behind(i, w, f[i]));
+                        if let Some((_, d)) = near.visible_among(i, w, flank & behind) {
                             filled[i] = d as f32;
                         }
                     }

@@ -162,6 +162,9 @@ pub struct ViewInputs<'a> {
     pub rgb: &'a [f32],
     pub alpha: &'a [f32],
     pub expected_depth: &'a [f32],
+    /// Expected depth of the render before removal, if known: the completed surfaces lie behind
+    /// the removed objects.
+    pub front_depth: Option<&'a [f32]>,
     /// Pixels to synthesize.
     pub fill: &'a [bool],
     /// The dilated hole (excluded from the depth fit).
@@ -401,7 +404,14 @@ impl Completer {
                 farther_covered: 0,
             });
         }
-        let view = DepthView { width: w, height: h, image: &rgb, render_depth: v.expected_depth, valid: &valid };
+        let view = DepthView {
+            width: w,
+            height: h,
+            image: &rgb,
+            render_depth: v.expected_depth,
+            valid: &valid,
+            front_depth: v.front_depth,
+        };
         let (prior, space) = self.prior.predict(&view)?;
         let mut anchored = depth::anchor(&view, &prior, space, v.fill, self.soft_radius)?;
         // covered hole pixels that look past the surfaces around the hole are synthesized too
@@ -420,7 +430,7 @@ impl Completer {
         let disparity = depth::disparity(&anchored.depth);
         let around: Vec<bool> = (0..w * h).map(|i| !fill[i] && covered[i]).collect();
         let planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
-        let mut labels = planes.fill_labels(&anchored.depth, &fill, w);
+        let mut labels = planes.fill_labels(&anchored.depth, &fill, v.front_depth, w);
         // but not in front of what the Gaussians left after removal show on a farther plane
         let farther_covered =
             depth::defer_to_covering(&planes, v.expected_depth, v.alpha, &fill, &mut labels, &mut anchored.depth, w);

@@ -31,6 +31,10 @@ const SMALL_PLANE_SHARE: f64 = 0.15;
 /// rule); the bench top of tests/surface_continuation.rs holds more.
 const SMALL_PLANE_RIM_SHARE: f64 = 0.04;
 const RIM_WIDTH: f32 = 1.5;
+/// How far (relative depth) in front of a removed object a plane continued over it may lie
+/// (`Surfaces::behind`): where the object met the surface it stood on, the two depths agree, and
+/// the rendered depth of an object's rim blends it with what lies behind.
+pub const BEHIND_TOLERANCE: f64 = 0.05;
 
 /// The planes around one hole and which of them is seen where they meet.
 #[derive(Clone, Debug)]
@@ -75,6 +79,24 @@ impl Surfaces {
             }
         }
         best
+    }
+
+    /// The planes (bit set) that lie behind the depth `front` at pixel `i`, within
+    /// BEHIND_TOLERANCE; every plane where `front` is not positive. A removed object hid only
+    /// what lay behind it: a kept object's face flanking the hole, continued as a plane, would
+    /// lie in front of it. On the synth room two-of-three a kept cylinder's face continued over
+    /// the hole in views 10-15 (10 % of their fill pixels' depth more than 10 % off, the
+    /// cylinder's blue pasted over the floor); with this rule 2-5 %. Paired runs (journal,
+    /// 2026-11-27): masked PSNR / LPIPS there 25.35 / 0.012 -> 25.48 / 0.012, statue-one 22.12 /
+    /// 0.097 -> 22.57 / 0.080, statue-two-of-three 22.84 / 0.053 -> 23.99 / 0.075, the cup
+    /// within 0.06 dB.
+    pub fn behind(&self, i: usize, w: usize, front: f32) -> u32 {
+        if !(front > 0.0 && front.is_finite()) {
+            return u32::MAX;
+        }
+        let (x, y) = center(i, w);
+        let limit = (1.0 + BEHIND_TOLERANCE) / front as f64;
+        self.planes.iter().enumerate().filter(|(_, p)| p.disparity(x, y) <= limit).fold(0, |b, (s, _)| b | 1 << s)
     }
 
     /// Whether, where planes `s` and `t` overlap, the nearer of them is shown.
@@ -167,13 +189,15 @@ impl Surfaces {
     }
 
     /// `labels`, except that each `fill` pixel takes the plane seen there among those that
-    /// flank it (`visible_among`, `flanking`): its completed depth blends the plane with the
-    /// render near the fill's edge and may lie off it.
-    pub fn fill_labels(&self, depth: &[f32], fill: &[bool], w: usize) -> Vec<u8> {
+    /// flank it (`visible_among`, `flanking`) and lie behind the removed objects (`front`, their
+    /// depth per pixel, if known: `behind`): its completed depth blends the plane with the render
+    /// near the fill's edge and may lie off it.
+    pub fn fill_labels(&self, depth: &[f32], fill: &[bool], front: Option<&[f32]>, w: usize) -> Vec<u8> {
         let mut labels = self.labels(depth, w);
         let flanks = flanking(&self.flank_labels(depth, w), fill, w, labels.len() / w);
         for (i, l) in labels.iter_mut().enumerate().filter(|(i, _)| fill[*i]) {
-            *l = self.visible_among(i, w, flanks[i]).map_or(0, |(s, _)| s as u8 + 1);
+            let behind = front.map_or(u32::MAX, |f| self.behind(i, w, f[i]));
+            *l = self.visible_among(i, w, flanks[i] & behind).map_or(0, |(s, _)| s as u8 + 1);
         }
         labels
     }
@@ -413,193 +437,5 @@ pub fn fill_by_surface(image: &[f32], fill: &[bool], labels: &[u8], w: usize, h:
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A floor (bottom) meeting a wall (top) at a crease, seen from inside the room: disparity is
-    /// the larger of the two planes' (the nearer surface).
-    fn room(w: usize, h: usize) -> (Plane, Plane, Vec<f32>) {
-        let floor = Plane { a: 0.0005, b: 0.006, c: 0.05 };
-        let wall = Plane { a: -0.0004, b: 0.0002, c: 0.25 };
-        let d = (0..w * h)
-            .map(|i| {
-                let (x, y) = center(i, w);
-                floor.disparity(x, y).max(wall.disparity(x, y)) as f32
-            })
-            .collect();
-        (floor, wall, d)
-    }
-
-    /// A hole across the room's crease (for 64 x 48), and the pixels around it.
-    fn hole_across_the_crease(w: usize, h: usize) -> (Vec<bool>, Vec<bool>) {
-        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
-        let known = hole.iter().map(|&m| !m).collect();
-        (hole, known)
-    }
-
-    /// A floor around a hole with a small patch of another plane (an eighth of the band, behind the
-    /// floor) in the band: at `gap` pixels from the hole it does not run into it and is dropped;
-    /// against the hole it continues into it.
-    fn small_patch_beside_a_hole(gap: usize) -> usize {
-        let (w, h) = (64, 48);
-        let floor = Plane { a: 0.0005, b: 0.006, c: 0.05 };
-        let patch = Plane { a: 0.0, b: 0.0, c: 0.08 };
-        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
-        let in_patch = |x: usize, y: usize| (40 + gap..43 + gap).contains(&x) && (14..34).contains(&y);
-        let disp: Vec<f32> = (0..w * h)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                let p = if in_patch(x, y) { patch } else { floor };
-                p.disparity(x as f64 + 0.5, y as f64 + 0.5) as f32
-            })
-            .collect();
-        let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
-        let band = band_around(&disp, &known, &hole, w, h).iter().filter(|&&b| b).count();
-        let patch_pixels = (0..w * h).filter(|&i| in_patch(i % w, i / w)).count();
-        let share = patch_pixels as f64 / band as f64;
-        assert!(share > 0.05 && share < SMALL_PLANE_SHARE, "the patch is {share} of the band");
-        surfaces_around(&disp, &known, &hole, w, h, 7).planes.len()
-    }
-
-    #[test]
-    fn a_small_plane_continues_only_where_it_runs_into_the_hole() {
-        assert_eq!(small_patch_beside_a_hole(2), 1, "a patch 2 pixels off the hole continued into it");
-        assert_eq!(small_patch_beside_a_hole(0), 2, "a patch against the hole was not continued");
-    }
-
-    #[test]
-    fn ransac_finds_both_planes_and_the_crease() {
-        let (w, h) = (64, 48);
-        let (floor, wall, disp) = room(w, h);
-        let (hole, known) = hole_across_the_crease(w, h);
-        let s = surfaces_around(&disp, &known, &hole, w, h, 7);
-        assert_eq!(s.planes.len(), 2, "{:?}", s.planes);
-        assert!(s.nearer_shown(0, 1) && s.nearer_shown(1, 0));
-        for p in &s.planes {
-            let truth = if (p.b - floor.b).abs() < (p.b - wall.b).abs() { floor } else { wall };
-            // the same disparity over the whole image (the data are f32)
-            for (x, y) in [(0.0, 0.0), (64.0, 0.0), (0.0, 48.0), (64.0, 48.0)] {
-                let (d, t) = (p.disparity(x, y), truth.disparity(x, y));
-                assert!((d - t).abs() < 1e-5 * t.abs(), "{p:?} vs {truth:?} at ({x}, {y})");
-            }
-        }
-        // every hole pixel gets the exact disparity of the nearer plane
-        for i in (0..w * h).filter(|&i| hole[i]) {
-            let (_, d) = s.visible(i, w).unwrap();
-            assert!((d - disp[i] as f64).abs() < 1e-6 * disp[i] as f64, "pixel {i}: {d} vs {}", disp[i]);
-        }
-        // the same corner seen from outside (the farther plane in front) flips the order
-        let convex: Vec<f32> = (0..w * h)
-            .map(|i| {
-                let (x, y) = center(i, w);
-                floor.disparity(x, y).min(wall.disparity(x, y)) as f32
-            })
-            .collect();
-        let s = surfaces_around(&convex, &known, &hole, w, h, 7);
-        assert!(!s.nearer_shown(0, 1) && !s.nearer_shown(1, 0));
-        for i in (0..w * h).filter(|&i| hole[i]) {
-            let (_, d) = s.visible(i, w).unwrap();
-            assert!((d - convex[i] as f64).abs() < 1e-6 * convex[i] as f64);
-        }
-    }
-
-    #[test]
-    fn labels_tolerate_scattered_depth_and_fill_pixels_take_the_visible_plane() {
-        let (w, h) = (64, 48);
-        let (_, _, disp) = room(w, h);
-        let (hole, known) = hole_across_the_crease(w, h);
-        let s = surfaces_around(&disp, &known, &hole, w, h, 7);
-        let exact: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
-        let truth = s.labels(&exact, w);
-        // known pixels 6 % off their plane (alternating sign, as a grass render scatters) keep
-        // their label; those 15 % off lose it. Fill pixels at a depth blended with the render
-        // (30 % off) take the plane seen there.
-        let off = |f: f32| -> Vec<f32> {
-            exact
-                .iter()
-                .enumerate()
-                .map(|(i, &z)| if hole[i] { 1.3 * z } else { z * (1.0 + f * (1 - 2 * (i % 2) as i32) as f32) })
-                .collect()
-        };
-        let near = s.fill_labels(&off(0.06), &hole, w);
-        let far = s.fill_labels(&off(0.15), &hole, w);
-        for i in 0..w * h {
-            assert!(truth[i] > 0);
-            if hole[i] {
-                let visible = s.visible(i, w).unwrap().0 as u8 + 1;
-                assert_eq!((near[i], far[i]), (visible, visible), "fill pixel {i}");
-            } else if s.planes.iter().filter(|p| p.residual(i, w, disp[i] as f64) < 0.3).count() == 1 {
-                // away from the crease, where the other plane is not within the scatter
-                assert_eq!(near[i], truth[i], "pixel {i} 6 % off");
-                assert_ne!(far[i], truth[i], "pixel {i} 15 % off");
-            }
-        }
-    }
-
-    /// A statue's hole: the pedestal's face (a near plane) shows only below and beside the hole's
-    /// bottom rows, bushes (a far plane) only well above it, and a lawn too rough for any plane
-    /// beside the rest. Seen nearest first, the pedestal's plane would cover the whole hole; it
-    /// continues only between its own pixels, and the rows flanked by nothing are left unlabelled.
-    #[test]
-    fn a_plane_continues_into_a_hole_only_between_its_own_pixels() {
-        let (w, h) = (64, 48);
-        let pedestal = Plane { a: 0.0, b: 0.0, c: 0.5 };
-        let bushes = Plane { a: 0.0, b: 0.0, c: 0.2 };
-        let s = Surfaces { planes: vec![pedestal, bushes], order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 10.0 };
-        let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
-        let depth: Vec<f32> = (0..w * h)
-            .map(|i| {
-                let (x, y) = (i % w, i / w);
-                if hole[i] {
-                    3.0
-                } else if y >= 30 && (16..48).contains(&x) {
-                    2.0
-                } else if y < 8 {
-                    5.0
-                } else {
-                    // lawn: disparity 0.3 scattered 15 %, 40 % or more off both planes
-                    (1.0 + 0.15 * (1 - 2 * (i % 2) as i32) as f32) / 0.3
-                }
-            })
-            .collect();
-        let labels = s.fill_labels(&depth, &hole, w);
-        for i in (0..w * h).filter(|&i| hole[i]) {
-            assert_eq!(s.visible(i, w).unwrap().0, 0, "nearest first, the pedestal is in front everywhere");
-            let expected = if i / w >= 30 { 1 } else { 0 };
-            assert_eq!(labels[i], expected, "hole pixel ({}, {})", i % w, i / w);
-        }
-    }
-
-    #[test]
-    fn colors_do_not_cross_surfaces() {
-        let (w, h) = (64, 48);
-        let (_, _, disp) = room(w, h);
-        let (hole, known) = hole_across_the_crease(w, h);
-        let s = surfaces_around(&disp, &known, &hole, w, h, 7);
-        let depth: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
-        let labels = s.labels(&depth, w);
-        // one color per surface
-        let image: Vec<f32> = (0..3 * w * h)
-            .map(|k| {
-                let i = k % (w * h);
-                let on = labels[i] as usize;
-                [0.0, 0.2 + 0.3 * (k / (w * h)) as f32, 0.9 - 0.2 * (k / (w * h)) as f32][on]
-            })
-            .collect();
-        assert!(labels.iter().all(|&l| l > 0));
-        let filled = fill_by_surface(&image, &hole, &labels, w, h, 3);
-        for k in 0..3 * w * h {
-            assert!(
-                (filled[k] - image[k]).abs() < 1e-5,
-                "channel {} pixel {}: {} vs {}",
-                k / (w * h),
-                k % (w * h),
-                filled[k],
-                image[k]
-            );
-        }
-        // a plain harmonic fill mixes them
-        let plain = harmonic_fill(&image, &known, w, h, 3);
-        assert!((0..3 * w * h).any(|k| (plain[k] - image[k]).abs() > 0.05));
-    }
-}
+#[path = "surfaces_tests.rs"]
+mod tests;

@@ -1,0 +1,230 @@
+//! Unit tests of surfaces.rs (closed-form planes and holes), kept beside it so that it stays
+//! short.
+
+use super::*;
+
+/// A floor (bottom) meeting a wall (top) at a crease, seen from inside the room: disparity is
+/// the larger of the two planes' (the nearer surface).
+fn room(w: usize, h: usize) -> (Plane, Plane, Vec<f32>) {
+    let floor = Plane { a: 0.0005, b: 0.006, c: 0.05 };
+    let wall = Plane { a: -0.0004, b: 0.0002, c: 0.25 };
+    let d = (0..w * h)
+        .map(|i| {
+            let (x, y) = center(i, w);
+            floor.disparity(x, y).max(wall.disparity(x, y)) as f32
+        })
+        .collect();
+    (floor, wall, d)
+}
+
+/// A hole across the room's crease (for 64 x 48), and the pixels around it.
+fn hole_across_the_crease(w: usize, h: usize) -> (Vec<bool>, Vec<bool>) {
+    let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
+    let known = hole.iter().map(|&m| !m).collect();
+    (hole, known)
+}
+
+/// A floor around a hole with a small patch of another plane (an eighth of the band, behind the
+/// floor) in the band: at `gap` pixels from the hole it does not run into it and is dropped;
+/// against the hole it continues into it.
+fn small_patch_beside_a_hole(gap: usize) -> usize {
+    let (w, h) = (64, 48);
+    let floor = Plane { a: 0.0005, b: 0.006, c: 0.05 };
+    let patch = Plane { a: 0.0, b: 0.0, c: 0.08 };
+    let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
+    let in_patch = |x: usize, y: usize| (40 + gap..43 + gap).contains(&x) && (14..34).contains(&y);
+    let disp: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let p = if in_patch(x, y) { patch } else { floor };
+            p.disparity(x as f64 + 0.5, y as f64 + 0.5) as f32
+        })
+        .collect();
+    let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+    let band = band_around(&disp, &known, &hole, w, h).iter().filter(|&&b| b).count();
+    let patch_pixels = (0..w * h).filter(|&i| in_patch(i % w, i / w)).count();
+    let share = patch_pixels as f64 / band as f64;
+    assert!(share > 0.05 && share < SMALL_PLANE_SHARE, "the patch is {share} of the band");
+    surfaces_around(&disp, &known, &hole, w, h, 7).planes.len()
+}
+
+#[test]
+fn a_small_plane_continues_only_where_it_runs_into_the_hole() {
+    assert_eq!(small_patch_beside_a_hole(2), 1, "a patch 2 pixels off the hole continued into it");
+    assert_eq!(small_patch_beside_a_hole(0), 2, "a patch against the hole was not continued");
+}
+
+#[test]
+fn ransac_finds_both_planes_and_the_crease() {
+    let (w, h) = (64, 48);
+    let (floor, wall, disp) = room(w, h);
+    let (hole, known) = hole_across_the_crease(w, h);
+    let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+    assert_eq!(s.planes.len(), 2, "{:?}", s.planes);
+    assert!(s.nearer_shown(0, 1) && s.nearer_shown(1, 0));
+    for p in &s.planes {
+        let truth = if (p.b - floor.b).abs() < (p.b - wall.b).abs() { floor } else { wall };
+        // the same disparity over the whole image (the data are f32)
+        for (x, y) in [(0.0, 0.0), (64.0, 0.0), (0.0, 48.0), (64.0, 48.0)] {
+            let (d, t) = (p.disparity(x, y), truth.disparity(x, y));
+            assert!((d - t).abs() < 1e-5 * t.abs(), "{p:?} vs {truth:?} at ({x}, {y})");
+        }
+    }
+    // every hole pixel gets the exact disparity of the nearer plane
+    for i in (0..w * h).filter(|&i| hole[i]) {
+        let (_, d) = s.visible(i, w).unwrap();
+        assert!((d - disp[i] as f64).abs() < 1e-6 * disp[i] as f64, "pixel {i}: {d} vs {}", disp[i]);
+    }
+    // the same corner seen from outside (the farther plane in front) flips the order
+    let convex: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = center(i, w);
+            floor.disparity(x, y).min(wall.disparity(x, y)) as f32
+        })
+        .collect();
+    let s = surfaces_around(&convex, &known, &hole, w, h, 7);
+    assert!(!s.nearer_shown(0, 1) && !s.nearer_shown(1, 0));
+    for i in (0..w * h).filter(|&i| hole[i]) {
+        let (_, d) = s.visible(i, w).unwrap();
+        assert!((d - convex[i] as f64).abs() < 1e-6 * convex[i] as f64);
+    }
+}
+
+#[test]
+fn labels_tolerate_scattered_depth_and_fill_pixels_take_the_visible_plane() {
+    let (w, h) = (64, 48);
+    let (_, _, disp) = room(w, h);
+    let (hole, known) = hole_across_the_crease(w, h);
+    let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+    let exact: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
+    let truth = s.labels(&exact, w);
+    // known pixels 6 % off their plane (alternating sign, as a grass render scatters) keep
+    // their label; those 15 % off lose it. Fill pixels at a depth blended with the render
+    // (30 % off) take the plane seen there.
+    let off = |f: f32| -> Vec<f32> {
+        exact
+            .iter()
+            .enumerate()
+            .map(|(i, &z)| if hole[i] { 1.3 * z } else { z * (1.0 + f * (1 - 2 * (i % 2) as i32) as f32) })
+            .collect()
+    };
+    let near = s.fill_labels(&off(0.06), &hole, None, w);
+    let far = s.fill_labels(&off(0.15), &hole, None, w);
+    for i in 0..w * h {
+        assert!(truth[i] > 0);
+        if hole[i] {
+            let visible = s.visible(i, w).unwrap().0 as u8 + 1;
+            assert_eq!((near[i], far[i]), (visible, visible), "fill pixel {i}");
+        } else if s.planes.iter().filter(|p| p.residual(i, w, disp[i] as f64) < 0.3).count() == 1 {
+            // away from the crease, where the other plane is not within the scatter
+            assert_eq!(near[i], truth[i], "pixel {i} 6 % off");
+            assert_ne!(far[i], truth[i], "pixel {i} 15 % off");
+        }
+    }
+}
+
+/// A statue's hole: the pedestal's face (a near plane) shows only below and beside the hole's
+/// bottom rows, bushes (a far plane) only well above it, and a lawn too rough for any plane
+/// beside the rest. Seen nearest first, the pedestal's plane would cover the whole hole; it
+/// continues only between its own pixels, and the rows flanked by nothing are left unlabelled.
+#[test]
+fn a_plane_continues_into_a_hole_only_between_its_own_pixels() {
+    let (w, h) = (64, 48);
+    let pedestal = Plane { a: 0.0, b: 0.0, c: 0.5 };
+    let bushes = Plane { a: 0.0, b: 0.0, c: 0.2 };
+    let s = Surfaces { planes: vec![pedestal, bushes], order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 10.0 };
+    let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
+    let depth: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            if hole[i] {
+                3.0
+            } else if y >= 30 && (16..48).contains(&x) {
+                2.0
+            } else if y < 8 {
+                5.0
+            } else {
+                // lawn: disparity 0.3 scattered 15 %, 40 % or more off both planes
+                (1.0 + 0.15 * (1 - 2 * (i % 2) as i32) as f32) / 0.3
+            }
+        })
+        .collect();
+    let labels = s.fill_labels(&depth, &hole, None, w);
+    for i in (0..w * h).filter(|&i| hole[i]) {
+        assert_eq!(s.visible(i, w).unwrap().0, 0, "nearest first, the pedestal is in front everywhere");
+        let expected = if i / w >= 30 { 1 } else { 0 };
+        assert_eq!(labels[i], expected, "hole pixel ({}, {})", i % w, i / w);
+    }
+}
+
+/// A kept object's face (a near plane) runs up to the hole on both sides along a few rows, a
+/// wall lies behind everything, and the removed object stood between them. Nearest first the
+/// face would cover those rows of the hole; it lies in front of the removed object there, so
+/// it never stood behind it: the wall continues instead.
+#[test]
+fn a_plane_in_front_of_the_removed_object_does_not_continue_over_it() {
+    let (w, h) = (64, 48);
+    let face = Plane { a: 0.0, b: 0.0, c: 0.5 };
+    let wall = Plane { a: 0.0, b: 0.0, c: 0.2 };
+    let s = Surfaces { planes: vec![face, wall], order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 10.0 };
+    let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
+    let rail = |i: usize| (16..22).contains(&(i / w)) && (16..48).contains(&(i % w));
+    let depth: Vec<f32> = (0..w * h)
+        .map(|i| {
+            if hole[i] {
+                3.0
+            } else if rail(i) {
+                2.0
+            } else {
+                5.0
+            }
+        })
+        .collect();
+    // the removed object at depth 3: the face lies a third in front of it
+    let front: Vec<f32> = (0..w * h).map(|i| if hole[i] { 3.0 } else { depth[i] }).collect();
+    let nearest_first = s.fill_labels(&depth, &hole, None, w);
+    let behind = s.fill_labels(&depth, &hole, Some(&front), w);
+    for i in (0..w * h).filter(|&i| hole[i]) {
+        let expected = if rail(i) { 1 } else { 2 };
+        assert_eq!(nearest_first[i], expected, "without the removed object's depth, pixel ({}, {})", i % w, i / w);
+        assert_eq!(behind[i], 2, "hole pixel ({}, {})", i % w, i / w);
+    }
+    // a plane within BEHIND_TOLERANCE in front of the object still continues (where the
+    // object stood on it, the two depths meet)
+    let touching: Vec<f32> = front.iter().map(|&d| if d == 3.0 { 2.0 / 0.97 } else { d }).collect();
+    let on_it = s.fill_labels(&depth, &hole, Some(&touching), w);
+    assert!((0..w * h).filter(|&i| hole[i] && rail(i)).all(|i| on_it[i] == 1));
+}
+
+#[test]
+fn colors_do_not_cross_surfaces() {
+    let (w, h) = (64, 48);
+    let (_, _, disp) = room(w, h);
+    let (hole, known) = hole_across_the_crease(w, h);
+    let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+    let depth: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
+    let labels = s.labels(&depth, w);
+    // one color per surface
+    let image: Vec<f32> = (0..3 * w * h)
+        .map(|k| {
+            let i = k % (w * h);
+            let on = labels[i] as usize;
+            [0.0, 0.2 + 0.3 * (k / (w * h)) as f32, 0.9 - 0.2 * (k / (w * h)) as f32][on]
+        })
+        .collect();
+    assert!(labels.iter().all(|&l| l > 0));
+    let filled = fill_by_surface(&image, &hole, &labels, w, h, 3);
+    for k in 0..3 * w * h {
+        assert!(
+            (filled[k] - image[k]).abs() < 1e-5,
+            "channel {} pixel {}: {} vs {}",
+            k / (w * h),
+            k % (w * h),
+            filled[k],
+            image[k]
+        );
+    }
+    // a plain harmonic fill mixes them
+    let plain = harmonic_fill(&image, &known, w, h, 3);
+    assert!((0..3 * w * h).any(|k| (plain[k] - image[k]).abs() > 0.05));
+}
