@@ -7,7 +7,8 @@
 //!   would round off). Which one that is, the band says per pair of planes: the nearer for a
 //!   bench top before the hedge behind it, the farther for the bench's top and front face at
 //!   their convex edge; where it does not say, the nearer, so that a background layer never
-//!   covers a nearer surface running into the hole (tests/surface_continuation.rs);
+//!   covers a nearer surface running into the hole (tests/surface_continuation.rs); and a plane
+//!   continues only where it lies behind the removed objects (`Surfaces::behind`);
 //! - depth-guided color: each pixel to synthesize is filled from the known pixels of its own
 //!   surface only (`fill_by_surface`), so floor texture does not bleed into the wall.
 
