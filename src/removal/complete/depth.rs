@@ -156,8 +156,7 @@ impl DepthPrior {
                     let near = surfaces.refit_near(&disparity, &known, &region, w, h);
                     let flanks = flanking_at(&near.flank_labels(&known_depth, w), &unknown, &part, w, h);
                     for (&i, &flank) in part.iter().zip(&flanks) {
-                        let behind = v.front_depth.map_or(u32::MAX, |f| near.behind(i, w, f[i]));
-                        if let Some((_, d)) = near.visible_among(i, w, flank & behind) {
+                        if let Some((_, d)) = near.visible_among(i, w, flank & near.behind(i, w, v.front_depth)) {
                             filled[i] = d as f32;
                         }
                     }

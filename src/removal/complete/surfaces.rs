@@ -82,8 +82,9 @@ impl Surfaces {
         best
     }
 
-    /// The planes (bit set) that lie behind the depth `front` at pixel `i`, within
-    /// BEHIND_TOLERANCE; every plane where `front` is not positive. A removed object hid only
+    /// The planes (bit set) that lie behind `front` (the removed objects' depth per pixel, if
+    /// known) at pixel `i`, within BEHIND_TOLERANCE; every plane where it is unknown or not
+    /// positive. A removed object hid only
     /// what lay behind it: a kept object's face flanking the hole, continued as a plane, would
     /// lie in front of it. On the synth room two-of-three a kept cylinder's face continued over
     /// the hole in views 10-15 (10 % of their fill pixels' depth more than 10 % off, the
@@ -91,10 +92,10 @@ impl Surfaces {
     /// 2026-11-27): masked PSNR / LPIPS there 25.35 / 0.012 -> 25.48 / 0.012, statue-one 22.12 /
     /// 0.097 -> 22.57 / 0.080, statue-two-of-three 22.84 / 0.053 -> 23.99 / 0.075, the cup
     /// within 0.06 dB.
-    pub fn behind(&self, i: usize, w: usize, front: f32) -> u32 {
-        if !(front > 0.0 && front.is_finite()) {
+    pub fn behind(&self, i: usize, w: usize, front: Option<&[f32]>) -> u32 {
+        let Some(front) = front.map(|f| f[i]).filter(|&d| d > 0.0 && d.is_finite()) else {
             return u32::MAX;
-        }
+        };
         let (x, y) = center(i, w);
         let limit = (1.0 + BEHIND_TOLERANCE) / front as f64;
         self.planes.iter().enumerate().filter(|(_, p)| p.disparity(x, y) <= limit).fold(0, |b, (s, _)| b | 1 << s)
@@ -197,8 +198,7 @@ impl Surfaces {
         let mut labels = self.labels(depth, w);
         let flanks = flanking(&self.flank_labels(depth, w), fill, w, labels.len() / w);
         for (i, l) in labels.iter_mut().enumerate().filter(|(i, _)| fill[*i]) {
-            let behind = front.map_or(u32::MAX, |f| self.behind(i, w, f[i]));
-            *l = self.visible_among(i, w, flanks[i] & behind).map_or(0, |(s, _)| s as u8 + 1);
+            *l = self.visible_among(i, w, flanks[i] & self.behind(i, w, front)).map_or(0, |(s, _)| s as u8 + 1);
         }
         labels
     }

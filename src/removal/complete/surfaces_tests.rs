@@ -24,6 +24,17 @@ fn hole_across_the_crease(w: usize, h: usize) -> (Vec<bool>, Vec<bool>) {
     (hole, known)
 }
 
+/// A hole in the middle of a 64 x 48 view: columns 24..40, rows 12..36.
+fn central_hole(w: usize, h: usize) -> Vec<bool> {
+    (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect()
+}
+
+/// `planes` as surfaces found around a hole: every one present, the nearer shown where they
+/// overlap, any disparity from 0 to 10 plausible.
+fn nearer_first(planes: Vec<Plane>) -> Surfaces {
+    Surfaces { planes, order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 10.0 }
+}
+
 /// A floor around a hole with a small patch of another plane (an eighth of the band, behind the
 /// floor) in the band: at `gap` pixels from the hole it does not run into it and is dropped;
 /// against the hole it continues into it.
@@ -31,7 +42,7 @@ fn small_patch_beside_a_hole(gap: usize) -> usize {
     let (w, h) = (64, 48);
     let floor = Plane { a: 0.0005, b: 0.006, c: 0.05 };
     let patch = Plane { a: 0.0, b: 0.0, c: 0.08 };
-    let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
+    let hole = central_hole(w, h);
     let in_patch = |x: usize, y: usize| (40 + gap..43 + gap).contains(&x) && (14..34).contains(&y);
     let disp: Vec<f32> = (0..w * h)
         .map(|i| {
@@ -132,8 +143,8 @@ fn a_plane_continues_into_a_hole_only_between_its_own_pixels() {
     let (w, h) = (64, 48);
     let pedestal = Plane { a: 0.0, b: 0.0, c: 0.5 };
     let bushes = Plane { a: 0.0, b: 0.0, c: 0.2 };
-    let s = Surfaces { planes: vec![pedestal, bushes], order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 10.0 };
-    let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
+    let s = nearer_first(vec![pedestal, bushes]);
+    let hole = central_hole(w, h);
     let depth: Vec<f32> = (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);
@@ -166,8 +177,8 @@ fn a_plane_in_front_of_the_removed_object_does_not_continue_over_it() {
     let (w, h) = (64, 48);
     let face = Plane { a: 0.0, b: 0.0, c: 0.5 };
     let wall = Plane { a: 0.0, b: 0.0, c: 0.2 };
-    let s = Surfaces { planes: vec![face, wall], order: Vec::new(), present: u32::MAX, lo: 0.0, hi: 10.0 };
-    let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (12..36).contains(&(i / w))).collect();
+    let s = nearer_first(vec![face, wall]);
+    let hole = central_hole(w, h);
     let rail = |i: usize| (16..22).contains(&(i / w)) && (16..48).contains(&(i % w));
     let depth: Vec<f32> = (0..w * h)
         .map(|i| {
