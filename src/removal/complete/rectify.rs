@@ -49,8 +49,9 @@ const BLURRY_FOOTPRINT: f64 = 1.5;
 /// and the floor was left to image-space translations (a checkerboard at the wrong period).
 /// Paired runs (journal, 2026-11-27): synth two-of-three 25.48 -> 26.14 dB masked PSNR,
 /// statue-one masked LPIPS 0.080 -> 0.047; synth one unchanged on the whole, though two of its
-/// views now fill a smooth blob (a triangular hole whose sparse far apex the trim leaves out: the
-/// grid shrinks, with less context; why the vote blurs there is open). 1 % and 4 % did worse.
+/// views now fill the box's never-seen footprint with a smooth blob at every seed: their smaller
+/// grid's coarsest pyramid level lends 2 source patches, and the layout from those persists
+/// (journal, 2026-11-27, later). 1 % and 4 % did worse.
 const BOX_TRIM: f64 = 0.02;
 
 /// Sample points per pixel side when writing back.
