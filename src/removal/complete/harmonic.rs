@@ -151,6 +151,9 @@ const SMOOTHING_SWEEPS: usize = 2;
 /// V-cycles at most; they stop earlier once a sweep changes no pixel by more than TOLERANCE.
 const MAX_CYCLES: usize = 60;
 const TOLERANCE: f64 = 1e-6;
+/// The coarsest level (at most 8 pixels across one way) is swept until it changes by less than
+/// a hundredth of TOLERANCE, at most this many times.
+const COARSEST_SWEEPS: usize = 1000;
 
 /// One V-cycle on `levels[k]` for A x = b: smooth, solve the residual's equation on the coarser
 /// level (the residual summed over each block: the stencil there spans twice the distance, so
@@ -159,9 +162,8 @@ const TOLERANCE: f64 = 1e-6;
 fn v_cycle(levels: &[Level], k: usize, x: &mut [f64], b: &[f64]) -> f64 {
     let level = &levels[k];
     let Some(coarse) = levels.get(k + 1) else {
-        // the coarsest level, at most 8 pixels across one way: swept until it settles
         let mut change = 0.0;
-        for _ in 0..1000 {
+        for _ in 0..COARSEST_SWEEPS {
             change = level.sweep(x, b);
             if change < TOLERANCE * 1e-2 {
                 break;
