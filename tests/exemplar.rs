@@ -214,13 +214,17 @@ fn rectified_and_in_image(hole: &[bool], dump: &str) -> (f64, f64, f64) {
     (masked_psnr(&rectified, &truth, hole), masked_psnr(&in_image, &truth, hole), masked_psnr(&harmonic, &truth, hole))
 }
 
+/// The hole in the receding checkerboard's floor: columns 36..60, rows 40..58.
+fn floor_hole() -> Vec<bool> {
+    (0..W * H).map(|i| (36..60).contains(&(i % W)) && (40..58).contains(&(i / W))).collect()
+}
+
 #[test]
 fn rectified_fill_continues_a_receding_checkerboard_in_phase() {
     // in the image the squares shrink towards the horizon, so image-space translations copy them
     // with the wrong period; synthesized in the floor's own frame the hole gets the squares the
     // exact ground truth has
-    let hole: Vec<bool> = (0..W * H).map(|i| (36..60).contains(&(i % W)) && (40..58).contains(&(i / W))).collect();
-    let (pr, pi, ph) = rectified_and_in_image(&hole, "rectified.png");
+    let (pr, pi, ph) = rectified_and_in_image(&floor_hole(), "rectified.png");
     eprintln!("hole PSNR: rectified {pr:.2} dB, in the image {pi:.2} dB, harmonic {ph:.2} dB");
     // when written: rectified 19.9 dB, in the image 11.8 dB, harmonic 11.4 dB; 18.7 dB rectified
     // since the grid is centred on the trimmed box of the hole (rectify.rs, BOX_TRIM)
@@ -234,7 +238,7 @@ fn rectified_fill_continues_a_receding_checkerboard_in_phase() {
 /// its sources fell below its hole texels, and the floor was left to the image-space pass.
 #[test]
 fn stray_far_pixels_do_not_stretch_the_rectified_grid() {
-    let mut hole: Vec<bool> = (0..W * H).map(|i| (36..60).contains(&(i % W)) && (40..58).contains(&(i / W))).collect();
+    let mut hole = floor_hole();
     for x in [30, 31, 60, 61] {
         hole[24 * W + x] = true;
     }

@@ -17,6 +17,12 @@ fn tmp(name: &str) -> std::path::PathBuf {
 }
 
 /// A w x h view of a tilted plane: inverse depth affine in pixel coordinates.
+/// A view for the depth stages, with no depth of the removed objects (every plane may
+/// continue into the hole).
+fn depth_view<'a>(w: usize, h: usize, image: &'a [f32], render_depth: &'a [f32], valid: &'a [bool]) -> DepthView<'a> {
+    DepthView { width: w, height: h, image, render_depth, valid, front_depth: None }
+}
+
 fn plane_disparity(w: usize, h: usize) -> Vec<f32> {
     (0..w * h).map(|i| 0.25 + 0.004 * (i % w) as f32 + 0.006 * (i / w) as f32).collect()
 }
@@ -39,8 +45,7 @@ fn least_squares_recovers_a_known_scale_and_shift() {
     let render_depth: Vec<f32> = truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
     let valid: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
-    let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid, front_depth: None };
+    let view = depth_view(w, h, &image, &render_depth, &valid);
     let anchored = depth::anchor(&view, &prior, PriorSpace::Disparity, &hole, 4.0).unwrap();
     assert!((anchored.scale - 2.5).abs() < 1e-5 && (anchored.shift - 0.3).abs() < 1e-6);
     assert!(anchored.residual < 1e-6);
@@ -72,8 +77,7 @@ fn builtin_prior_keeps_the_crease_where_a_floor_meets_a_wall() {
     let render_depth: Vec<f32> = truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
     let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
-    let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &known, front_depth: None };
+    let view = depth_view(w, h, &image, &render_depth, &known);
     let (prior, _) = DepthPrior::BuiltIn.predict(&view).unwrap();
     let err = (0..w * h).filter(|&i| hole[i]).map(|i| (prior[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
     assert!(err < 1e-4, "planar prior relative error {err}");
@@ -122,8 +126,7 @@ fn builtin_prior_follows_a_curved_wall_into_each_hole() {
     let render_depth: Vec<f32> = truth.iter().zip(&holes).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
     let known: Vec<bool> = holes.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
-    let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &known, front_depth: None };
+    let view = depth_view(w, h, &image, &render_depth, &known);
     let (prior, _) = DepthPrior::BuiltIn.predict(&view).unwrap();
     // within the wall's curvature over one hole (0.7 %); one plane for both holes: 6.1 %
     let err = (0..w * h).filter(|&i| holes[i]).map(|i| (prior[i] - truth[i]).abs() / truth[i]).fold(0f32, f32::max);
@@ -188,8 +191,7 @@ fn see_through_flags_covered_hole_pixels_behind_the_continued_surfaces() {
         (0..w * h).map(|i| if hole[i] && i % w < 32 { 1.3 / truth[i] } else { 1.0 / truth[i] }).collect();
     let valid: Vec<bool> = hole.iter().map(|&m| !m).collect();
     let image = vec![0.5; 3 * w * h];
-    let view =
-        DepthView { width: w, height: h, image: &image, render_depth: &render_depth, valid: &valid, front_depth: None };
+    let view = depth_view(w, h, &image, &render_depth, &valid);
     let (prior, space) = DepthPrior::BuiltIn.predict(&view).unwrap();
     let fill = vec![false; w * h];
     let anchored = depth::anchor(&view, &prior, space, &fill, 4.0).unwrap();
@@ -267,14 +269,7 @@ fn onnx_depth_priors_are_anchored_in_their_own_space() {
         assert!(lo >= 0.0 && hi <= 1.0, "encoding out of range {lo}..{hi}");
         let image: Vec<f32> = (0..3).flat_map(|_| encoded.iter().copied()).collect();
         let render_depth: Vec<f32> = depth_truth.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { d }).collect();
-        let view = DepthView {
-            width: w,
-            height: h,
-            image: &image,
-            render_depth: &render_depth,
-            valid: &valid,
-            front_depth: None,
-        };
+        let view = depth_view(w, h, &image, &render_depth, &valid);
         let prior = DepthPrior::onnx(&path, contract).unwrap();
         let (p, space) = prior.predict(&view).unwrap();
         assert_eq!(p.len(), w * h);

@@ -3,25 +3,34 @@
 
 use super::*;
 
-/// A floor (bottom) meeting a wall (top) at a crease, seen from inside the room: disparity is
-/// the larger of the two planes' (the nearer surface).
-fn room(w: usize, h: usize) -> (Plane, Plane, Vec<f32>) {
+/// A 64 x 48 view into a room: a floor (bottom) meeting a wall (top) at a crease, seen from
+/// inside (disparity the larger of the two planes': the nearer surface), a hole across the
+/// crease, the pixels around it and the surfaces found there.
+struct CreaseHole {
+    w: usize,
+    h: usize,
+    floor: Plane,
+    wall: Plane,
+    disp: Vec<f32>,
+    hole: Vec<bool>,
+    known: Vec<bool>,
+    surfaces: Surfaces,
+}
+
+fn crease_hole() -> CreaseHole {
+    let (w, h) = (64, 48);
     let floor = Plane { a: 0.0005, b: 0.006, c: 0.05 };
     let wall = Plane { a: -0.0004, b: 0.0002, c: 0.25 };
-    let d = (0..w * h)
+    let disp: Vec<f32> = (0..w * h)
         .map(|i| {
             let (x, y) = center(i, w);
             floor.disparity(x, y).max(wall.disparity(x, y)) as f32
         })
         .collect();
-    (floor, wall, d)
-}
-
-/// A hole across the room's crease (for 64 x 48), and the pixels around it.
-fn hole_across_the_crease(w: usize, h: usize) -> (Vec<bool>, Vec<bool>) {
     let hole: Vec<bool> = (0..w * h).map(|i| (24..40).contains(&(i % w)) && (14..40).contains(&(i / w))).collect();
-    let known = hole.iter().map(|&m| !m).collect();
-    (hole, known)
+    let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+    let surfaces = surfaces_around(&disp, &known, &hole, w, h, 7);
+    CreaseHole { w, h, floor, wall, disp, hole, known, surfaces }
 }
 
 /// A hole in the middle of a 64 x 48 view: columns 24..40, rows 12..36.
@@ -67,10 +76,7 @@ fn a_small_plane_continues_only_where_it_runs_into_the_hole() {
 
 #[test]
 fn ransac_finds_both_planes_and_the_crease() {
-    let (w, h) = (64, 48);
-    let (floor, wall, disp) = room(w, h);
-    let (hole, known) = hole_across_the_crease(w, h);
-    let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+    let CreaseHole { w, h, floor, wall, disp, hole, known, surfaces: s } = crease_hole();
     assert_eq!(s.planes.len(), 2, "{:?}", s.planes);
     assert!(s.nearer_shown(0, 1) && s.nearer_shown(1, 0));
     for p in &s.planes {
@@ -103,10 +109,7 @@ fn ransac_finds_both_planes_and_the_crease() {
 
 #[test]
 fn labels_tolerate_scattered_depth_and_fill_pixels_take_the_visible_plane() {
-    let (w, h) = (64, 48);
-    let (_, _, disp) = room(w, h);
-    let (hole, known) = hole_across_the_crease(w, h);
-    let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+    let CreaseHole { w, h, disp, hole, surfaces: s, .. } = crease_hole();
     let exact: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
     let truth = s.labels(&exact, w);
     // known pixels 6 % off their plane (alternating sign, as a grass render scatters) keep
@@ -209,10 +212,7 @@ fn a_plane_in_front_of_the_removed_object_does_not_continue_over_it() {
 
 #[test]
 fn colors_do_not_cross_surfaces() {
-    let (w, h) = (64, 48);
-    let (_, _, disp) = room(w, h);
-    let (hole, known) = hole_across_the_crease(w, h);
-    let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+    let CreaseHole { w, h, disp, hole, known, surfaces: s, .. } = crease_hole();
     let depth: Vec<f32> = disp.iter().map(|&d| 1.0 / d).collect();
     let labels = s.labels(&depth, w);
     // one color per surface
