@@ -242,12 +242,24 @@ pub fn components(mask: &[bool], w: usize, h: usize) -> Vec<Vec<usize>> {
     out
 }
 
-/// Grows a mask by `radius` pixels (a disc).
+/// Grows a mask by `radius` pixels (a disc): the pixels within `radius` of it by `distance_to`.
+/// Only the mask's bounding box grown by the radius can be reached (a chamfer step moves at most
+/// a pixel along each axis and costs at least 1), so the distance runs there: the same pixels,
+/// without a pass over the whole image for a small mask.
 pub fn dilate(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<bool> {
     if radius <= 0.0 {
         return mask.to_vec();
     }
-    distance_to(mask, w, h).iter().map(|&d| d <= radius).collect()
+    let mut out = vec![false; w * h];
+    let Some(b) = bounding_box(mask, w) else { return out };
+    let reach = radius.ceil() as usize + 1;
+    let win = b.grown(reach, reach, w, h);
+    let (ww, wh) = (win.width(), win.height());
+    let local: Vec<bool> = (0..ww * wh).map(|k| mask[(win.y0 + k / ww) * w + win.x0 + k % ww]).collect();
+    for (k, d) in distance_to(&local, ww, wh).into_iter().enumerate() {
+        out[(win.y0 + k / ww) * w + win.x0 + k % ww] = d <= radius;
+    }
+    out
 }
 
 /// A soft version of `mask`: 1 inside, falling smoothly to 0 at `radius` pixels outside.
@@ -475,6 +487,21 @@ mod tests {
         assert_eq!(soft[10 * w + 10], 1.0);
         assert_eq!(soft[10 * w + 15], 0.0);
         assert!(soft[10 * w + 12] > 0.0 && soft[10 * w + 12] < 1.0);
+    }
+
+    #[test]
+    fn dilation_in_the_masks_box_equals_the_whole_images() {
+        // random sparse masks, some touching the border, against the distance over the whole image
+        let mut rng = crate::rng::Rng::new(7);
+        for trial in 0..40 {
+            let (w, h) = (30 + trial % 7, 25 + trial % 5);
+            let density = [0.002, 0.01, 0.05][trial % 3];
+            let m: Vec<bool> = (0..w * h).map(|_| rng.uniform() < density).collect();
+            for radius in [0.5f32, 1.0, 1.5, 2.0, 3.7, 6.0, 11.0] {
+                let whole: Vec<bool> = distance_to(&m, w, h).iter().map(|&d| d <= radius).collect();
+                assert_eq!(dilate(&m, w, h, radius), whole, "trial {trial}, radius {radius}");
+            }
+        }
     }
 
     #[test]

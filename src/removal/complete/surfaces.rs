@@ -13,7 +13,7 @@
 //!   surface only (`fill_by_surface`), so floor texture does not bleed into the wall.
 
 use super::harmonic::harmonic_fill;
-use crate::image_ops::{bounding_box, crop, distance_to, Rect};
+use crate::image_ops::{bounding_box, crop, dilate, distance_to, Rect};
 use crate::planes::{center, fit_planes, least_squares, Plane, PLANE_TOLERANCE};
 
 /// Relative disparity tolerance of the surface labels that guide color. Looser than the fit's: the
@@ -370,8 +370,8 @@ pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h:
         for k in 0..s.planes.len() {
             let mut own = vec![false; w * h];
             members.iter().filter(|m| m.1 == k).for_each(|&(i, _)| own[i] = true);
-            for (bits, d) in support.iter_mut().zip(distance_to(&own, w, h)) {
-                if d <= radius {
+            for (bits, near) in support.iter_mut().zip(dilate(&own, w, h, radius)) {
+                if near {
                     *bits |= 1 << k;
                 }
             }
