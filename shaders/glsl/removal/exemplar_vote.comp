@@ -54,5 +54,6 @@ void main() {
         image.v[p] = acc.x;
         image.v[n + p] = acc.y;
         image.v[2 * n + p] = acc.z;
+        packed.v[p] = pack_rgb(acc);
     }
 }

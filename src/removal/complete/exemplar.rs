@@ -75,6 +75,7 @@ struct ExemplarPush {
     /// 1 where dist_in holds every target's distance to its nnf_in source on the current image.
     dist_known: u32,
     disparity: u64,
+    packed: u64,
 }
 
 /// One level of the pyramid over the crop around the hole.
@@ -382,6 +383,7 @@ impl ExemplarFill {
         let targets_b = Buffer::from_slice(gpu, "exemplar targets", &targets)?;
         let holes_b = Buffer::from_slice(gpu, "exemplar holes", &holes)?;
         let sources_b = Buffer::from_slice(gpu, "exemplar sources", sources)?;
+        let packed = Buffer::from_slice(gpu, "exemplar packed image", &pack_rgb(&level.image, n))?;
         let disparity = match level.disparity.is_empty() {
             true => None,
             false => Some(Buffer::from_slice(gpu, "exemplar disparity", &level.disparity)?),
@@ -407,6 +409,7 @@ impl ExemplarFill {
                 depth_weight: if disparity.is_some() { DEPTH_WEIGHT } else { 0.0 },
                 dist_known: known as u32,
                 disparity: disparity.as_ref().map_or(0, |b| b.address()),
+                packed: packed.address(),
             };
         let mut rec = Recorder::new(gpu)?;
         let mut current = 0;
@@ -442,6 +445,12 @@ impl ExemplarFill {
         rec.submit_and_wait()?;
         Ok((image.download(gpu, 3 * n)?, fields[current].download(gpu, n)?))
     }
+}
+
+/// The planar RGB `image` of `n` pixels as exemplar.glsl's pack_rgb words.
+fn pack_rgb(image: &[f32], n: usize) -> Vec<u32> {
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 1023.0).round_ties_even() as u32;
+    (0..n).map(|i| q(image[i]) | q(image[n + i]) << 10 | q(image[2 * n + i]) << 20).collect()
 }
 
 /// The first field of a level: from the coarser level's field (a source at coarse (sx, sy) maps
