@@ -13,7 +13,7 @@
 //!   surface only (`fill_by_surface`), so floor texture does not bleed into the wall.
 
 use super::harmonic::harmonic_fill;
-use crate::image_ops::{bounding_box, crop, dilate, distance_to, Rect};
+use crate::image_ops::{bounding_box, crop, dilate, Rect};
 use crate::planes::{center, fit_planes, least_squares, Plane, PLANE_TOLERANCE};
 
 /// Relative disparity tolerance of the surface labels that guide color. Looser than the fit's: the
@@ -313,9 +313,8 @@ pub fn flanking_at(labels: &[u8], unknown: &[bool], pixels: &[usize], w: usize, 
 /// The band around `hole` whose surfaces continue into it: the known pixels with a finite
 /// positive disparity within 0.3 sqrt(hole pixels) of it (4 to 48 pixels).
 fn band_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h: usize) -> Vec<bool> {
-    let radius = band_radius(hole.iter().filter(|&&m| m).count());
-    let dist = distance_to(hole, w, h);
-    (0..w * h).map(|i| known[i] && !hole[i] && dist[i] <= radius && disp[i] > 0.0 && disp[i].is_finite()).collect()
+    let near = dilate(hole, w, h, band_radius(hole.iter().filter(|&&m| m).count()));
+    (0..w * h).map(|i| known[i] && !hole[i] && near[i] && disp[i] > 0.0 && disp[i].is_finite()).collect()
 }
 
 /// The width of the band around a hole of `holes` pixels.
@@ -348,8 +347,7 @@ pub fn surfaces_around(disp: &[f32], known: &[bool], hole: &[bool], w: usize, h:
         in_band.iter().fold((f64::INFINITY, 0f64), |(lo, hi), &i| (lo.min(disp[i] as f64), hi.max(disp[i] as f64)));
     let mut s = Surfaces { planes, order: Vec::new(), present: u32::MAX, lo: 0.5 * lo, hi: 2.0 * hi };
     let radius = band_radius(holes);
-    let hole_dist = distance_to(hole, w, h);
-    let rim: Vec<bool> = (0..w * h).map(|i| band[i] && hole_dist[i] <= RIM_WIDTH).collect();
+    let rim: Vec<bool> = band.iter().zip(dilate(hole, w, h, RIM_WIDTH)).map(|(&b, near)| b && near).collect();
     loop {
         let members: Vec<(usize, usize)> =
             in_band.iter().filter_map(|&i| s.member(i, w, disp[i] as f64).map(|m| (i, m))).collect();
