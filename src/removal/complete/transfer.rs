@@ -6,7 +6,7 @@
 //! depth guidance pays off in color, not just in geometry.
 
 use super::source_views::{back_project, sees, SourceView};
-use crate::image_ops::{box_count, box_max, box_sum, sample_lanczos3};
+use crate::image_ops::{bounding_box, box_count, box_max, box_sum, sample_lanczos3};
 use crate::scene::exposure::ColorAffine;
 use crate::scene::Camera;
 
@@ -176,27 +176,35 @@ fn refuse_outside_own_range(
 
 /// Per pixel (planar RGB), the mean of `own - other` over the pixels within the window of
 /// half-width 2 `radius` (two box passes: a tent) where both are known and differ by at most
-/// LOCAL_MATCH_MAX_DIFFERENCE, weighted by the tent; 0 where no such pixel is near.
+/// LOCAL_MATCH_MAX_DIFFERENCE, weighted by the tent; 0 where no such pixel is near. Computed only
+/// where it is read, the pixels with another view's color and none of their own (0 elsewhere):
+/// the box passes run over those pixels' box grown by 2 `radius`, which holds every pixel their
+/// sums reach, so the sums are the whole image's, term for term.
 fn local_offset(own: &[Option<[f64; 3]>], other: &[Option<[f64; 3]>], w: usize, h: usize, radius: usize) -> Vec<f32> {
     let n = w * h;
+    let mut out = vec![0f32; 3 * n];
+    let read: Vec<bool> = (0..n).map(|p| own[p].is_none() && other[p].is_some()).collect();
+    let Some(b) = bounding_box(&read, w) else { return out };
+    let win = b.grown(2 * radius, 2 * radius, w, h);
+    let (ww, wh) = (win.width(), win.height());
+    let (wn, at) = (ww * wh, |k: usize| (win.y0 + k / ww) * w + win.x0 + k % ww);
     // three difference planes and a weight plane
-    let mut diff = vec![0f32; 4 * n];
-    for p in 0..n {
-        if let (Some(a), Some(b)) = (own[p], other[p]) {
+    let mut diff = vec![0f32; 4 * wn];
+    for k in 0..wn {
+        if let (Some(a), Some(b)) = (own[at(k)], other[at(k)]) {
             if (0..3).any(|c| (a[c] - b[c]).abs() > LOCAL_MATCH_MAX_DIFFERENCE) {
                 continue;
             }
             for c in 0..3 {
-                diff[c * n + p] = (a[c] - b[c]) as f32;
+                diff[c * wn + k] = (a[c] - b[c]) as f32;
             }
-            diff[3 * n + p] = 1.0;
+            diff[3 * wn + k] = 1.0;
         }
     }
-    let sums = box_sum(&box_sum(&diff, w, h, 4, radius), w, h, 4, radius);
-    let mut out = vec![0f32; 3 * n];
-    for p in (0..n).filter(|&p| sums[3 * n + p] > 0.5) {
+    let sums = box_sum(&box_sum(&diff, ww, wh, 4, radius), ww, wh, 4, radius);
+    for k in (0..wn).filter(|&k| read[at(k)] && sums[3 * wn + k] > 0.5) {
         for c in 0..3 {
-            out[c * n + p] = sums[c * n + p] / sums[3 * n + p];
+            out[c * n + at(k)] = sums[c * wn + k] / sums[3 * wn + k];
         }
     }
     out
