@@ -7,6 +7,12 @@ pub mod models;
 
 use image_metrics as reference;
 
+/// PSNR in f64 of a render, clamped to [0, 1] as it is displayed, against its image.
+pub fn render_psnr(render: &[f32], image: &[f32]) -> f64 {
+    let se: f64 = render.iter().zip(image).map(|(&a, &b)| (a.clamp(0.0, 1.0) as f64 - b as f64).powi(2)).sum();
+    10.0 * (1.0 / (se / render.len() as f64).max(1e-12)).log10()
+}
+
 /// PSNR over the pixels where `mask` is set (all channels); None for an empty mask.
 pub fn masked_psnr(a: &[f32], b: &[f32], mask: &[bool]) -> Option<f64> {
     let hw = mask.len();

@@ -36,7 +36,7 @@ pub use fuse::Fill;
 pub use select::{hole_mask, select};
 
 use crate::gpu::Gpu;
-use crate::image_ops::crop;
+use crate::image_ops::{crop, Rect};
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
 use complete::source_views::SourceView;
@@ -182,7 +182,7 @@ pub fn remove(
     let Selection { removed, count: removed_count, background, .. } = selection;
     let mut result = background;
     let (mut fusion, mut prune_used, mut pruned) = (None, None, 0);
-    let mut refine_report = None;
+    let (mut refine_report, mut refine_windows) = (None, Vec::new());
     if opts.stages.complete {
         // 3. completion
         complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
@@ -208,14 +208,18 @@ pub fn remove(
             let consensus =
                 (!patch.owned.is_empty()).then(|| consensus_weights(&mut views, &patch.owned, opts.fuse.tolerance));
             // 5. refinement, the holes weighing more than the rest of each view
-            let (refined, report) =
+            let (refined, report, windows) =
                 refine_views(gpu, &result, &views, cameras, consensus, patch.added, extent, opts, progress)?;
-            (result, refine_report) = (refined, Some(report));
+            (result, refine_report, refine_windows) = (refined, Some(report), windows);
             clock.lap("refine");
         }
     }
     // final renders and background preservation: PSNR outside the dilated hole vs the original
     let (after, bg_psnr) = final_renders(gpu, &result, &views, opts.background, progress)?;
+    if let Some(report) = refine_report.as_mut() {
+        let targets: Vec<&[f32]> = views.iter().map(|v| v.completion().rgb.as_slice()).collect();
+        report.psnr_after = Some(refine::window_psnr(&after, &targets, cameras, &refine_windows));
+    }
     clock.lap("render");
     let report = RemovalReport {
         labels: opts.labels.clone(),
@@ -371,7 +375,7 @@ fn consensus_weights(views: &mut [EditedView], owned: &[Vec<bool>], tolerance: f
 /// Stage 5: refines `scene` against the completed views (`cameras`, theirs), each view's hole
 /// weighing `hole_weight` times the rest, times its `consensus` weights where there are some;
 /// each view over its window around the hole and the `patch_gaussians` (the last of `scene`)
-/// unless `whole_views` is set.
+/// unless `whole_views` is set. Also returns each view's window (None: the whole view).
 #[allow(clippy::too_many_arguments)]
 fn refine_views(
     gpu: &Gpu,
@@ -383,11 +387,12 @@ fn refine_views(
     extent: f64,
     opts: &RemoveOptions,
     progress: Progress,
-) -> Result<(GaussianScene, RefineReport)> {
+) -> Result<(GaussianScene, RefineReport, Vec<Option<Rect>>)> {
     let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
     let mut masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
     let mut targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
     let mut cameras = cameras.to_vec();
+    let mut windows = vec![None; cameras.len()];
     if !opts.refine.whole_views {
         // each view over its window (`refine::refine_window`); a view that sees neither its
         // hole nor the patch keeps its whole frame, the anchor of everything it sees
@@ -398,12 +403,15 @@ fn refine_views(
             targets[i] = crop(&targets[i], w, h, 3, win);
             masks[i] = crop(&masks[i], w, h, 1, win);
             *cam = refine::window_camera(cam, win);
+            windows[i] = Some(win);
         }
     }
     let total = opts.refine.iters as usize;
-    refine::refine(gpu, scene, &cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
-        progress("refine", it as usize, total)
-    })
+    let (refined, report) =
+        refine::refine(gpu, scene, &cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
+            progress("refine", it as usize, total)
+        })?;
+    Ok((refined, report, windows))
 }
 
 /// Renders the result from every edited view; PSNR against the original render outside each

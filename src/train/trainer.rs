@@ -12,6 +12,7 @@ use super::exposure::ViewExposures;
 use super::fused::{GroupStep, ProjectBackwardAdam};
 use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
 use super::mcmc::{self, McmcPasses, RelocationStats};
+use crate::eval::render_psnr;
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
@@ -606,10 +607,4 @@ impl Trainer {
         self.sh_stepped = last_nonzero.map_or(0, |c| c as u32 + 1);
         Ok(())
     }
-}
-
-/// PSNR in f64 of a render, clamped to [0, 1] as it is displayed, against its image.
-fn render_psnr(render: &[f32], image: &[f32]) -> f64 {
-    let se: f64 = render.iter().zip(image).map(|(&a, &b)| (a.clamp(0.0, 1.0) as f64 - b as f64).powi(2)).sum();
-    10.0 * (1.0 / (se / render.len() as f64).max(1e-12)).log10()
 }
