@@ -262,6 +262,59 @@ pub fn borrow_inventions(
 mod tests {
     use super::*;
 
+    /// The local color offset against its closed form: the mean of own - other over the pairs
+    /// that qualify, each weighted by the tent of two box passes cut at the image's borders (per
+    /// axis, the count of window centres within `radius` of both pixels), computed only where
+    /// another view's color stands without an own one.
+    #[test]
+    fn local_offset_is_the_tent_weighted_mean_difference_where_it_is_read() {
+        let (w, h, radius) = (40usize, 30usize, 3usize);
+        let mut rng = crate::rng::Rng::new(5);
+        let mut color = |base: f64| -> [f64; 3] { std::array::from_fn(|_| base + 0.15 * rng.uniform()) };
+        let (mut own, mut other) = (vec![None; w * h], vec![None; w * h]);
+        for y in 0..h {
+            for x in 0..w {
+                let p = y * w + x;
+                // the pairs lie up to 2 radius left of the first pixel that reads them
+                if x < 20 {
+                    own[p] = Some(color(0.3));
+                }
+                if x >= 14 && y >= 4 {
+                    // a few pairs differ by more than LOCAL_MATCH_MAX_DIFFERENCE and do not count
+                    other[p] = Some(color(if (x * y) % 11 == 0 { 0.6 } else { 0.35 }));
+                }
+            }
+        }
+        let offset = local_offset(&own, &other, w, h, radius);
+        let reach = |a: usize, b: usize, dim: usize| {
+            (0..dim).filter(|&m| m.abs_diff(a) <= radius && m.abs_diff(b) <= radius).count() as f64
+        };
+        let mut checked = 0;
+        for p in 0..w * h {
+            let (px, py) = (p % w, p / w);
+            let read = own[p].is_none() && other[p].is_some();
+            let (mut sum, mut weight) = ([0f64; 3], 0f64);
+            for q in 0..w * h {
+                let (Some(a), Some(b)) = (own[q], other[q]) else { continue };
+                if (0..3).any(|c| (a[c] - b[c]).abs() > LOCAL_MATCH_MAX_DIFFERENCE) {
+                    continue;
+                }
+                let k = reach(px, q % w, w) * reach(py, q / w, h);
+                for c in 0..3 {
+                    sum[c] += k * (a[c] - b[c]);
+                }
+                weight += k;
+            }
+            for c in 0..3 {
+                let want = if read && weight > 0.5 { sum[c] / weight } else { 0.0 };
+                let got = offset[c * w * h + p] as f64;
+                assert!((got - want).abs() < 1e-5, "({px}, {py}) channel {c}: {got} against {want}");
+            }
+            checked += (read && weight > 0.5) as usize;
+        }
+        assert!(checked > 50, "only {checked} pixels with an offset");
+    }
+
     /// Own colors on the left half (a gray ramp 0.40..0.50); other colors on the right half:
     /// within the ramp's range plus the margin they stay, outside it in any channel they go, and
     /// beyond the window's reach of the own pixels they stay whatever they are. The window of
