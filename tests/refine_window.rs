@@ -1,11 +1,13 @@
 //! The refinement's window (removal/refine.rs): a view refined over part of its image must see
 //! those pixels exactly as the whole view does, and the window must hold the view's hole and
-//! every patch Gaussian it sees.
+//! every patch Gaussian it sees. Stage 2 renders the view after the deletion over such a window
+//! too (`ViewRenderer::render_within`).
 
 mod common;
 
 use cogeo::image_ops::Rect;
 use cogeo::removal::refine::{refine_window, seen_by_any, window_camera};
+use cogeo::removal::select::ViewRenderer;
 use cogeo::render::{RenderSettings, SceneRenderer};
 use common::{random_scene, test_camera, SceneMix};
 
@@ -87,4 +89,45 @@ fn the_gaussians_no_window_shows_change_no_pixel() {
             assert_eq!(differ, 0, "{name}: {differ} values differ without the unseen Gaussians");
         }
     }
+}
+
+/// The render after deleting a cluster of Gaussians, over the box of the pixels they blended
+/// and the original render elsewhere, equals a whole render of the remaining Gaussians: within
+/// the window's float rounding inside it, within the transmittance a pixel ends with outside.
+#[test]
+fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render() {
+    let gpu = common::gpu();
+    let scene = random_scene(21, 0, SceneMix::default());
+    let camera = test_camera(96, 72);
+    let (w, h) = (96usize, 72usize);
+    // the small Gaussians of a cluster on one side of the view
+    let removed: Vec<bool> = (0..scene.len())
+        .map(|i| {
+            let m = scene.means[i];
+            (m[0] - 0.6).hypot(m[1] - 0.3) < 0.6 && scene.log_scales[i].iter().all(|&s| s < -1.2)
+        })
+        .collect();
+    let count = removed.iter().filter(|&&r| r).count();
+    assert!(count > 3 && count < scene.len() / 3, "{count} of {} removed", scene.len());
+    let remaining = scene.subset(&removed.iter().map(|&r| !r).collect::<Vec<_>>());
+    let bg = [0.2f32, 0.4, 0.6];
+    let before = ViewRenderer::new(&gpu, &scene, Some(&removed)).unwrap().render(&camera, bg).unwrap();
+    let touched: Vec<bool> = before.weight.iter().map(|&x| x > 0.0).collect();
+    let window = cogeo::image_ops::bounding_box(&touched, w).expect("the removed Gaussians show");
+    assert!(window.width() * window.height() < w * h / 2, "window {window:?} is most of the view");
+    let mut after = ViewRenderer::new(&gpu, &remaining, None).unwrap();
+    let whole = after.render(&camera, bg).unwrap();
+    let within = after.render_within(&camera, window, bg, &before).unwrap();
+    let differ = |a: &[f32], b: &[f32]| {
+        let worst = a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+        assert!(worst < 2e-4, "differs by {worst}");
+    };
+    differ(&within.rgb, &whole.rgb);
+    differ(&within.alpha, &whole.alpha);
+    for p in (0..w * h).filter(|&p| whole.alpha[p] > 0.5) {
+        assert!((within.depth[p] - whole.depth[p]).abs() < 1e-4 * whole.depth[p], "depth at {p}");
+    }
+    // and the deletion did change the window
+    let changed = (0..w * h).filter(|&p| (before.alpha[p] - whole.alpha[p]).abs() > 0.05).count();
+    assert!(changed > 50, "only {changed} pixels changed by the deletion");
 }

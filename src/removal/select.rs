@@ -13,7 +13,8 @@
 //!    (`complete::depth::see_through`).
 
 use crate::gpu::Gpu;
-use crate::image_ops::dilate;
+use crate::image_ops::{bounding_box, dilate, Rect};
+use crate::removal::refine::window_camera;
 use crate::render::{RenderSettings, SceneRenderer};
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
@@ -77,6 +78,32 @@ impl ViewRenderer {
         let o = self.renderer.render(camera, &settings)?;
         let weight = if self.features { o.features } else { vec![0.0; o.alpha.len()] };
         Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight })
+    }
+    /// `render` of `window` of the view only (`refine::window_camera`: the whole view's pixels,
+    /// up to the float rounding of the moved principal point), the rest of the image `outside`'s
+    /// colors, alpha and depth: for a scene that differs from `outside`'s only by Gaussians the
+    /// window holds every pixel of. The weight is zero (no marked Gaussians).
+    pub fn render_within(
+        &mut self,
+        camera: &Camera,
+        window: Rect,
+        background: [f32; 3],
+        outside: &Rendered,
+    ) -> Result<Rendered> {
+        let part = self.render(&window_camera(camera, window), background)?;
+        let (w, ww) = (camera.width as usize, window.width());
+        let n = outside.alpha.len();
+        let (mut rgb, mut alpha, mut depth) = (outside.rgb.clone(), outside.alpha.clone(), outside.depth.clone());
+        for k in 0..ww * window.height() {
+            let p = (window.y0 + k / ww) * w + window.x0 + k % ww;
+            let pn = part.alpha.len();
+            for c in 0..3 {
+                rgb[c * n + p] = part.rgb[c * pn + k];
+            }
+            alpha[p] = part.alpha[k];
+            depth[p] = part.depth[k];
+        }
+        Ok(Rendered { rgb, alpha, depth, weight: vec![0.0; n] })
     }
 }
 
@@ -163,7 +190,16 @@ pub fn hole_masks(
         let (w, h) = (cam.width as usize, cam.height as usize);
         let mut before = original.render(cam, cfg.background)?;
         let hole = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, cfg.dilate);
-        let after_removal = remaining.render(cam, cfg.background)?;
+        // Without kept objects (whose weight only a whole render gives) the render after the
+        // deletion differs from the original only where the removed Gaussians blended: it is
+        // rendered over their pixels' box, the rest is the original's (the masks stage on the
+        // statue `images_2` 5.0 -> 3.8 s). A removed Gaussian that ends a pixel's blending
+        // without blending there changes that pixel by less than the transmittance left, 1e-4.
+        let touched: Vec<bool> = before.weight.iter().map(|&x| x > 0.0).collect();
+        let after_removal = match (kept, bounding_box(&touched, w)) {
+            (None, Some(window)) => remaining.render_within(cam, window, cfg.background, &before)?,
+            _ => remaining.render(cam, cfg.background)?,
+        };
         let fill: Vec<bool> =
             (0..w * h).map(|p| hole[p] && !after_removal.kept_object_covers(p, cfg.keep_alpha)).collect();
         let footprint = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, 1.0);
