@@ -242,29 +242,36 @@ pub fn components(mask: &[bool], w: usize, h: usize) -> Vec<Vec<usize>> {
     out
 }
 
-/// Grows a mask by `radius` pixels (a disc): the pixels within `radius` of it by `distance_to`.
-/// Only the mask's bounding box grown by the radius can be reached (a chamfer step moves at most
-/// a pixel along each axis and costs at least 1), so the distance runs there: the same pixels,
-/// without a pass over the whole image for a small mask.
-pub fn dilate(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<bool> {
-    if radius <= 0.0 {
-        return mask.to_vec();
-    }
-    let mut out = vec![false; w * h];
+/// `distance_to` where it is at most `radius`, infinity elsewhere. Only the mask's bounding box
+/// grown by the radius can be reached that near (a chamfer step moves at most a pixel along each
+/// axis and costs at least 1), so the distance runs there: the same values, without a pass over
+/// the whole image for a small mask.
+pub fn distance_within(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<f32> {
+    let mut out = vec![f32::INFINITY; w * h];
     let Some(b) = bounding_box(mask, w) else { return out };
-    let reach = radius.ceil() as usize + 1;
+    let reach = radius.max(0.0).ceil() as usize + 1;
     let win = b.grown(reach, reach, w, h);
     let (ww, wh) = (win.width(), win.height());
     let local: Vec<bool> = (0..ww * wh).map(|k| mask[(win.y0 + k / ww) * w + win.x0 + k % ww]).collect();
     for (k, d) in distance_to(&local, ww, wh).into_iter().enumerate() {
-        out[(win.y0 + k / ww) * w + win.x0 + k % ww] = d <= radius;
+        if d <= radius {
+            out[(win.y0 + k / ww) * w + win.x0 + k % ww] = d;
+        }
     }
     out
 }
 
+/// Grows a mask by `radius` pixels (a disc): the pixels within `radius` of it by `distance_to`.
+pub fn dilate(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<bool> {
+    if radius <= 0.0 {
+        return mask.to_vec();
+    }
+    distance_within(mask, w, h, radius).iter().map(|&d| d <= radius).collect()
+}
+
 /// A soft version of `mask`: 1 inside, falling smoothly to 0 at `radius` pixels outside.
 pub fn feather(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<f32> {
-    distance_to(mask, w, h)
+    distance_within(mask, w, h, radius.max(0.0))
         .iter()
         .map(|&d| {
             if radius <= 0.0 {
@@ -490,16 +497,25 @@ mod tests {
     }
 
     #[test]
-    fn dilation_in_the_masks_box_equals_the_whole_images() {
+    fn distance_and_dilation_in_the_masks_box_equal_the_whole_images() {
         // random sparse masks, some touching the border, against the distance over the whole image
         let mut rng = crate::rng::Rng::new(7);
         for trial in 0..40 {
             let (w, h) = (30 + trial % 7, 25 + trial % 5);
             let density = [0.002, 0.01, 0.05][trial % 3];
             let m: Vec<bool> = (0..w * h).map(|_| rng.uniform() < density).collect();
-            for radius in [0.5f32, 1.0, 1.5, 2.0, 3.7, 6.0, 11.0] {
-                let whole: Vec<bool> = distance_to(&m, w, h).iter().map(|&d| d <= radius).collect();
-                assert_eq!(dilate(&m, w, h, radius), whole, "trial {trial}, radius {radius}");
+            for radius in [0.0f32, 0.5, 1.0, 1.5, 2.0, 3.7, 6.0, 11.0] {
+                let whole = distance_to(&m, w, h);
+                let near: Vec<f32> = whole.iter().map(|&d| if d <= radius { d } else { f32::INFINITY }).collect();
+                let within = distance_within(&m, w, h, radius);
+                assert!(
+                    within.iter().zip(&near).all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "trial {trial}, radius {radius}"
+                );
+                let grown: Vec<bool> = whole.iter().map(|&d| d <= radius).collect();
+                if radius > 0.0 {
+                    assert_eq!(dilate(&m, w, h, radius), grown, "trial {trial}, radius {radius}");
+                }
             }
         }
     }
