@@ -79,6 +79,7 @@ impl ViewRenderer {
         let weight = if self.features { o.features } else { vec![0.0; o.alpha.len()] };
         Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight })
     }
+
     /// `render` of `window` of the view only (`refine::window_camera`: the whole view's pixels,
     /// up to the float rounding of the moved principal point), the rest of the image `outside`'s
     /// colors, alpha and depth: for a scene that differs from `outside`'s only by Gaussians the
@@ -92,11 +93,10 @@ impl ViewRenderer {
     ) -> Result<Rendered> {
         let part = self.render(&window_camera(camera, window), background)?;
         let (w, ww) = (camera.width as usize, window.width());
-        let n = outside.alpha.len();
+        let (n, pn) = (outside.alpha.len(), part.alpha.len());
         let (mut rgb, mut alpha, mut depth) = (outside.rgb.clone(), outside.alpha.clone(), outside.depth.clone());
-        for k in 0..ww * window.height() {
+        for k in 0..pn {
             let p = (window.y0 + k / ww) * w + window.x0 + k % ww;
-            let pn = part.alpha.len();
             for c in 0..3 {
                 rgb[c * n + p] = part.rgb[c * pn + k];
             }

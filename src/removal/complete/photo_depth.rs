@@ -108,9 +108,9 @@ impl SeenPixels<'_> {
     }
 
     /// `mean_variance` of each of `scales`, the same sums in the same order, but pixel by pixel:
-    /// a pixel's samples at neighbouring scales lie close together in each photo, so the photos'
-    /// pixels are read while in cache (a sweep of every pixel per scale read them all 101 times
-    /// from memory).
+    /// a pixel's samples at neighbouring scales lie close together in each photo, where a sweep
+    /// of every pixel per scale went through all the photos' sampled pixels once per scale (the
+    /// photo depth stage 4.7 -> 3.0 s on the statue `images_2`).
     fn mean_variances(&self, scales: &[f64]) -> Vec<f64> {
         // -0.0: where `Sum for f64` starts, so that the sums are bit for bit mean_variance's
         let mut sums = vec![(-0.0f64, 0usize); scales.len()];
