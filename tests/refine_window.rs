@@ -93,7 +93,8 @@ fn the_gaussians_no_window_shows_change_no_pixel() {
 
 /// The render after deleting a cluster of Gaussians, over the box of the pixels they blended
 /// and the original render elsewhere, equals a whole render of the remaining Gaussians: within
-/// the window's float rounding inside it, within the transmittance a pixel ends with outside.
+/// the window's float rounding inside it, within the transmittance a pixel ends with outside;
+/// with kept objects marked, so does their weight within the window.
 #[test]
 fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render() {
     let gpu = common::gpu();
@@ -130,4 +131,13 @@ fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render(
     // and the deletion did change the window
     let changed = (0..w * h).filter(|&p| (before.alpha[p] - whole.alpha[p]).abs() > 0.05).count();
     assert!(changed > 50, "only {changed} pixels changed by the deletion");
+    // with kept objects marked among the remaining Gaussians, their weight within the window
+    let kept: Vec<bool> = remaining.means.iter().map(|m| m[1] > 0.0).collect();
+    let mut after = ViewRenderer::new(&gpu, &remaining, Some(&kept)).unwrap();
+    let whole = after.render(&camera, bg).unwrap();
+    let within = after.render_within(&camera, window, bg, &before).unwrap();
+    differ(&within.rgb, &whole.rgb);
+    let crop = |v: &[f32]| cogeo::image_ops::crop(v, w, h, 1, window);
+    differ(&crop(&within.weight), &crop(&whole.weight));
+    assert!(crop(&whole.weight).iter().filter(|&&x| x > 0.1).count() > 50, "no kept weight in the window");
 }

@@ -83,7 +83,7 @@ impl ViewRenderer {
     /// `render` of `window` of the view only (`refine::window_camera`: the whole view's pixels,
     /// up to the float rounding of the moved principal point), the rest of the image `outside`'s
     /// colors, alpha and depth: for a scene that differs from `outside`'s only by Gaussians the
-    /// window holds every pixel of. The weight is zero (no marked Gaussians).
+    /// window holds every pixel of. The marked Gaussians' weight is the window's, zero outside.
     pub fn render_within(
         &mut self,
         camera: &Camera,
@@ -95,6 +95,7 @@ impl ViewRenderer {
         let (w, ww) = (camera.width as usize, window.width());
         let (n, pn) = (outside.alpha.len(), part.alpha.len());
         let (mut rgb, mut alpha, mut depth) = (outside.rgb.clone(), outside.alpha.clone(), outside.depth.clone());
+        let mut weight = vec![0.0; n];
         for k in 0..pn {
             let p = (window.y0 + k / ww) * w + window.x0 + k % ww;
             for c in 0..3 {
@@ -102,8 +103,9 @@ impl ViewRenderer {
             }
             alpha[p] = part.alpha[k];
             depth[p] = part.depth[k];
+            weight[p] = part.weight[k];
         }
-        Ok(Rendered { rgb, alpha, depth, weight: vec![0.0; n] })
+        Ok(Rendered { rgb, alpha, depth, weight })
     }
 }
 
@@ -160,7 +162,7 @@ pub struct MaskedView {
     /// Original render: RGB, and the alpha and expected depth that color transfer checks.
     pub before: Rendered,
     /// Render right after deleting the Gaussians (the input of completion); its `weight` is the
-    /// kept objects'.
+    /// kept objects' (in the hole and around it; zero where the deletion changed nothing).
     pub after_removal: Rendered,
     /// Dilated hole M.
     pub hole: Vec<bool>,
@@ -190,15 +192,16 @@ pub fn hole_masks(
         let (w, h) = (cam.width as usize, cam.height as usize);
         let mut before = original.render(cam, cfg.background)?;
         let hole = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, cfg.dilate);
-        // Without kept objects (whose weight only a whole render gives) the render after the
-        // deletion differs from the original only where the removed Gaussians blended: it is
-        // rendered over their pixels' box, the rest is the original's (the masks stage on the
-        // statue `images_2` 5.0 -> 3.8 s). A removed Gaussian that ends a pixel's blending
-        // without blending there changes that pixel by less than the transmittance left, 1e-4.
-        let touched: Vec<bool> = before.weight.iter().map(|&x| x > 0.0).collect();
-        let after_removal = match (kept, bounding_box(&touched, w)) {
-            (None, Some(window)) => remaining.render_within(cam, window, cfg.background, &before)?,
-            _ => remaining.render(cam, cfg.background)?,
+        // The render after the deletion differs from the original only where the removed
+        // Gaussians blended: it is rendered over their pixels' box, the rest is the original's
+        // (the masks stage on the statue `images_2` 5.0 -> 3.8 s). A removed Gaussian that ends
+        // a pixel's blending without blending there changes that pixel by less than the
+        // transmittance left, 1e-4. The kept objects' weight is only read in the hole, which
+        // the box takes in too (the dilation reaches past the blended pixels).
+        let touched: Vec<bool> = (0..w * h).map(|p| before.weight[p] > 0.0 || hole[p]).collect();
+        let after_removal = match bounding_box(&touched, w) {
+            Some(window) => remaining.render_within(cam, window, cfg.background, &before)?,
+            None => remaining.render(cam, cfg.background)?,
         };
         let fill: Vec<bool> =
             (0..w * h).map(|p| hole[p] && !after_removal.kept_object_covers(p, cfg.keep_alpha)).collect();
