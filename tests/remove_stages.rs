@@ -16,13 +16,13 @@ fn tmp(name: &str) -> std::path::PathBuf {
     d
 }
 
-/// A w x h view of a tilted plane: inverse depth affine in pixel coordinates.
 /// A view for the depth stages, with no depth of the removed objects (every plane may
 /// continue into the hole).
 fn depth_view<'a>(w: usize, h: usize, image: &'a [f32], render_depth: &'a [f32], valid: &'a [bool]) -> DepthView<'a> {
     DepthView { width: w, height: h, image, render_depth, valid, front_depth: None }
 }
 
+/// A w x h view of a tilted plane: inverse depth affine in pixel coordinates.
 fn plane_disparity(w: usize, h: usize) -> Vec<f32> {
     (0..w * h).map(|i| 0.25 + 0.004 * (i % w) as f32 + 0.006 * (i / w) as f32).collect()
 }
