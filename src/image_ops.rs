@@ -128,6 +128,12 @@ impl Rect {
         self.y1 - self.y0
     }
 
+    /// The index, in a `w` pixels wide image, of this rectangle's `k`-th pixel (row-major):
+    /// pixel `k` of a crop (`crop`) back in the image it was cut from.
+    pub fn pixel(&self, k: usize, w: usize) -> usize {
+        (self.y0 + k / self.width()) * w + self.x0 + k % self.width()
+    }
+
     /// This rectangle grown by `mx` pixels left and right and `my` up and down, clamped to a
     /// w x h image.
     pub fn grown(&self, mx: usize, my: usize, w: usize, h: usize) -> Rect {
@@ -252,10 +258,10 @@ pub fn distance_within(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<f3
     let reach = radius.max(0.0).ceil() as usize + 1;
     let win = b.grown(reach, reach, w, h);
     let (ww, wh) = (win.width(), win.height());
-    let local: Vec<bool> = (0..ww * wh).map(|k| mask[(win.y0 + k / ww) * w + win.x0 + k % ww]).collect();
+    let local: Vec<bool> = (0..ww * wh).map(|k| mask[win.pixel(k, w)]).collect();
     for (k, d) in distance_to(&local, ww, wh).into_iter().enumerate() {
         if d <= radius {
-            out[(win.y0 + k / ww) * w + win.x0 + k % ww] = d;
+            out[win.pixel(k, w)] = d;
         }
     }
     out

@@ -92,12 +92,12 @@ impl ViewRenderer {
         outside: &Rendered,
     ) -> Result<Rendered> {
         let part = self.render(&window_camera(camera, window), background)?;
-        let (w, ww) = (camera.width as usize, window.width());
+        let w = camera.width as usize;
         let (n, pn) = (outside.alpha.len(), part.alpha.len());
         let (mut rgb, mut alpha, mut depth) = (outside.rgb.clone(), outside.alpha.clone(), outside.depth.clone());
         let mut weight = vec![0.0; n];
         for k in 0..pn {
-            let p = (window.y0 + k / ww) * w + window.x0 + k % ww;
+            let p = window.pixel(k, w);
             for c in 0..3 {
                 rgb[c * n + p] = part.rgb[c * pn + k];
             }

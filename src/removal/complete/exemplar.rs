@@ -286,7 +286,7 @@ impl ExemplarFill {
         let Some(b) = bounding_box(fill, w) else { return Ok(out) };
         let win = surfaces::fill_window(b, w, h);
         let (cw, ch) = (win.width(), win.height());
-        let at = |k: usize| (win.y0 + k / cw) * w + win.x0 + k % cw;
+        let at = |k: usize| win.pixel(k, w);
         let mut levels = vec![Level {
             w: cw,
             h: ch,

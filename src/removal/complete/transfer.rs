@@ -187,7 +187,7 @@ fn local_offset(own: &[Option<[f64; 3]>], other: &[Option<[f64; 3]>], w: usize, 
     let Some(b) = bounding_box(&read, w) else { return out };
     let win = b.grown(2 * radius, 2 * radius, w, h);
     let (ww, wh) = (win.width(), win.height());
-    let (wn, at) = (ww * wh, |k: usize| (win.y0 + k / ww) * w + win.x0 + k % ww);
+    let (wn, at) = (ww * wh, |k: usize| win.pixel(k, w));
     // three difference planes and a weight plane
     let mut diff = vec![0f32; 4 * wn];
     for k in 0..wn {
