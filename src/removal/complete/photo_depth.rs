@@ -97,22 +97,13 @@ impl SeenPixels<'_> {
         Some((0..3).map(|c| (squares[c] / k - (sum[c] / k).powi(2)).max(0.0)).sum())
     }
 
-    /// Mean variance over all pixels at one scale.
-    fn mean_variance(&self, scale: f64) -> f64 {
-        let v: Vec<f64> = (0..self.pixels.len()).filter_map(|i| self.variance(i, scale)).collect();
-        if v.is_empty() {
-            f64::INFINITY
-        } else {
-            v.iter().sum::<f64>() / v.len() as f64
-        }
-    }
-
-    /// `mean_variance` of each of `scales`, the same sums in the same order, but pixel by pixel:
-    /// a pixel's samples at neighbouring scales lie close together in each photo, where a sweep
-    /// of every pixel per scale went through all the photos' sampled pixels once per scale (the
-    /// photo depth stage 4.7 -> 3.0 s on the statue `images_2`).
+    /// Mean variance over all pixels (those that have one, in pixel order; infinity when none
+    /// does) at each of `scales`. Pixel by pixel, all scales at once: a pixel's samples at
+    /// neighbouring scales lie close together in each photo, where a sweep of every pixel per
+    /// scale went through all the photos' sampled pixels once per scale (the photo depth stage
+    /// 4.7 -> 3.0 s on the statue `images_2`, the same sums).
     fn mean_variances(&self, scales: &[f64]) -> Vec<f64> {
-        // -0.0: where `Sum for f64` starts, so that the sums are bit for bit mean_variance's
+        // -0.0: where `Sum for f64` starts, as the per-scale sums did before
         let mut sums = vec![(-0.0f64, 0usize); scales.len()];
         for i in 0..self.pixels.len() {
             for (sum, &s) in sums.iter_mut().zip(scales) {
@@ -195,7 +186,7 @@ pub fn correct_hole_depth(
         return DepthScale { cost_before, cost_after: cost_before, ..unchanged };
     }
     // NaN or no better: leave the depth
-    if seen.mean_variance(global).partial_cmp(&cost_before) != Some(std::cmp::Ordering::Less) {
+    if seen.mean_variances(&[global])[0].partial_cmp(&cost_before) != Some(std::cmp::Ordering::Less) {
         return DepthScale { cost_before, cost_after: cost_before, ..unchanged };
     }
     // per pixel around it: each candidate's costs summed over a window of seen pixels
