@@ -148,7 +148,10 @@ pub fn shared_capture(name: &str) -> PathBuf {
 /// `<dir>.partial`, moved to `dir` only once `make` returns, so an interrupted run leaves no
 /// half-made folder for a later run to trust.
 pub fn make_folder(dir: &std::path::Path, make: impl FnOnce(&std::path::Path)) {
-    let partial = dir.with_extension("partial");
+    // the whole name and a suffix: `with_extension` would cut a name such as cup-images-d1.5-i800
+    let mut partial = dir.as_os_str().to_owned();
+    partial.push(".partial");
+    let partial = std::path::PathBuf::from(partial);
     std::fs::remove_dir_all(&partial).ok();
     std::fs::create_dir_all(&partial).unwrap_or_else(|e| panic!("cannot create {}: {e}", partial.display()));
     make(&partial);

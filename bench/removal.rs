@@ -13,7 +13,8 @@
 //!
 //! `--scenes` names scenes, or the groups `synth` (the default: the three rooms), `real`
 //! (statue-one, statue-two-of-three, cup-one, cup-two-of-three; hours on 2 CPU cores at full
-//! size, `--real-downscale 2` for a quicker look) or `all`. Synth scenes write
+//! size, `--real-downscale 2` for a quicker look; per capture, e.g. `statue=1,cup=1.5`, where a
+//! factor that is not whole resamples the photos) or `all`. Synth scenes write
 //! bench/results/removal-<device>.json and .md, bench/results/removal-example.png (input,
 //! removal only, cogeo, ground truth on one held-out view), and replace the table between the
 //! `removal-table` markers of bench/RESULTS.md (unless --no-results); real scenes write
