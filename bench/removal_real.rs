@@ -179,7 +179,9 @@ fn resampled_capture(spec: &RealSpec, shared: &Path, factor: &str) -> PathBuf {
                 let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
                 small.save(images.join(format!("{stem}.png"))).expect("cannot write a resampled photo");
             }
-            for model in ["sparse", "cameras.txt", "images.txt", "points3D.txt", "cameras.bin", "images.bin", "points3D.bin"] {
+            for model in
+                ["sparse", "cameras.txt", "images.txt", "points3D.txt", "cameras.bin", "images.bin", "points3D.bin"]
+            {
                 if shared.join(model).exists() {
                     std::os::unix::fs::symlink(shared.join(model).canonicalize().unwrap(), tmp.join(model)).unwrap();
                 }

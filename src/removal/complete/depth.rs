@@ -22,7 +22,7 @@
 //! Either model may name its single input and output as it likes.
 
 use super::harmonic::harmonic_fill;
-use super::surfaces::{flanking_at, surfaces_around, Surfaces};
+use super::surfaces::{beside, flanking_at, surfaces_around, Surfaces};
 use crate::image_ops::{components, feather, resize_bilinear};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
@@ -60,6 +60,56 @@ pub fn fit_scale_shift(x: &[f32], y: &[f32], select: &[bool]) -> Option<(f64, f6
 pub enum PriorSpace {
     Disparity,
     Depth,
+}
+
+/// How much nearer than the removed objects a pixel beside the hole lies when it stands in front
+/// of them (`in_front_of_removed`).
+pub const IN_FRONT_RATIO: f32 = 0.9;
+/// The window (radius in pixels) over which the render before removal says how far the removed
+/// objects were beside a pixel: wider than the hole's dilation, so that it reaches the objects.
+const IN_FRONT_RADIUS: usize = 8;
+/// Hole pixels within this relative depth of a pixel beside the hole show its own surface before
+/// removal (the dilation's ring, or a surface running on under the objects): they say nothing of
+/// how far the objects were.
+const SAME_SURFACE: f32 = 0.05;
+
+/// The `known` pixels beside the `hole` (4-neighbours) that stand in front of the removed
+/// objects: their rendered depth lies nearer than IN_FRONT_RATIO times the median depth that the
+/// render before removal (`front_depth`) had over the hole within IN_FRONT_RADIUS, leaving out the
+/// hole pixels that showed the pixel's own surface (within SAME_SURFACE of its depth). Such as the
+/// statue beside a box on the lawn behind it; not the ground at the box's foot, which meets the
+/// box's depth there.
+pub fn in_front_of_removed(
+    render_depth: &[f32],
+    front_depth: &[f32],
+    known: &[bool],
+    hole: &[bool],
+    w: usize,
+    h: usize,
+) -> Vec<bool> {
+    let mut out = vec![false; w * h];
+    let mut depths = Vec::new();
+    let r = IN_FRONT_RADIUS;
+    for q in (0..w * h).filter(|&q| known[q] && render_depth[q] > 0.0 && beside(q, hole, w)) {
+        let (x, y) = (q % w, q / w);
+        let own = render_depth[q];
+        depths.clear();
+        for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
+            for i in yy * w + x.saturating_sub(r)..=yy * w + (x + r).min(w - 1) {
+                let d = front_depth[i];
+                if hole[i] && d > 0.0 && d.is_finite() && (d - own).abs() > SAME_SURFACE * own {
+                    depths.push(d);
+                }
+            }
+        }
+        if depths.is_empty() {
+            continue;
+        }
+        let mid = depths.len() / 2;
+        let median = *depths.select_nth_unstable_by(mid, f32::total_cmp).1;
+        out[q] = own < IN_FRONT_RATIO * median;
+    }
+    out
 }
 
 /// Which ONNX depth contract a model follows.
@@ -153,7 +203,11 @@ impl DepthPrior {
                     // was fitted (`Surfaces::refit_near`)
                     let mut region = vec![false; w * h];
                     part.iter().for_each(|&i| region[i] = true);
-                    let near = surfaces.refit_near(&disparity, &known, &region, w, h);
+                    let mut near = surfaces.refit_near(&disparity, &known, &region, w, h);
+                    if let Some(front) = v.front_depth {
+                        let in_front = in_front_of_removed(v.render_depth, front, &known, &region, w, h);
+                        near.stop_in_front(&disparity, &in_front, &region, w);
+                    }
                     let flanks = flanking_at(&near.flank_labels(&known_depth, w), &unknown, &part, w, h);
                     for (&i, &flank) in part.iter().zip(&flanks) {
                         if let Some((_, d)) = near.visible_among(i, w, flank & near.behind(i, w, v.front_depth)) {
@@ -304,7 +358,7 @@ pub fn defer_to_covering(
     for i in (0..fill.len()).filter(|&i| fill[i] && alpha[i] >= COVERED_ALPHA) {
         // the plane the covering Gaussians' depth lies on (labelled only here: a few fill pixels)
         let plane = surfaces.label_at(i, w, render_depth[i]);
-        if plane == 0 || plane == labels[i] {
+        if plane == 0 || plane == labels[i] || !surfaces.continues(plane as usize - 1) {
             continue;
         }
         let (x, y) = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);

@@ -429,7 +429,11 @@ impl Completer {
         // depth guides color: the planes around the fill, and which of them each pixel lies on
         let disparity = depth::disparity(&anchored.depth);
         let around: Vec<bool> = (0..w * h).map(|i| !fill[i] && covered[i]).collect();
-        let planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
+        let mut planes = surfaces::surfaces_around(&disparity, &around, &fill, w, h, depth::PLANE_SEED);
+        if let Some(front) = v.front_depth {
+            let in_front = depth::in_front_of_removed(v.expected_depth, front, &around, &fill, w, h);
+            planes.stop_in_front(&disparity, &in_front, &fill, w);
+        }
         let mut labels = planes.fill_labels(&anchored.depth, &fill, v.front_depth, w);
         // but not in front of what the Gaussians left after removal show on a farther plane
         let farther_covered =
