@@ -396,6 +396,11 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &st
 /// Each scene's strip (bench/results/removal-real-<scene>.png): its first held-out view in each
 /// of `columns` (folders of images named like the views), side by side; then the sheet of every
 /// scene's latest strip; returns the sheet's file name under bench/results.
+/// The contact sheet's columns (input, removal only, cogeo, perfect inpainting, ground truth) and
+/// their largest width in pixels.
+const SHEET_COLUMNS: u32 = 5;
+const SHEET_COLUMN: u32 = 256;
+
 fn contact_sheet(scenes: &[(&str, Vec<PathBuf>, PathBuf)]) -> String {
     let strip_path = |scene: &str| crate::common::results_path(&format!("removal-real-{scene}.png"));
     for (scene, columns, metrics) in scenes {
@@ -409,9 +414,27 @@ fn contact_sheet(scenes: &[(&str, Vec<PathBuf>, PathBuf)]) -> String {
         }
         strip.save(strip_path(scene)).unwrap();
     }
-    // every scene's latest strip, in the table's order
-    let strips: Vec<image::RgbImage> =
-        REAL_SCENES.iter().filter_map(|s| image::open(strip_path(s.name)).ok().map(|i| i.to_rgb8())).collect();
+    // every scene's latest strip, in the table's order, its columns at most SHEET_COLUMN pixels
+    // wide (a strip of the 504-wide statue was 1.7 MB); a wider stored strip is stored again so
+    let strips: Vec<image::RgbImage> = REAL_SCENES
+        .iter()
+        .filter_map(|s| {
+            let strip = image::open(strip_path(s.name)).ok()?.to_rgb8();
+            let (w, h) = strip.dimensions();
+            if w <= SHEET_COLUMNS * (SHEET_COLUMN + 2) {
+                return Some(strip);
+            }
+            let scale = (SHEET_COLUMNS * SHEET_COLUMN) as f64 / w as f64;
+            let small = image::imageops::resize(
+                &strip,
+                (w as f64 * scale).round() as u32,
+                (h as f64 * scale).round() as u32,
+                image::imageops::FilterType::Triangle,
+            );
+            small.save(strip_path(s.name)).unwrap();
+            Some(small)
+        })
+        .collect();
     let width = strips.iter().map(|s| s.width()).max().unwrap_or(1);
     let height = strips.iter().map(|s| s.height()).sum::<u32>().max(1);
     let mut sheet = image::RgbImage::from_pixel(width, height, image::Rgb([255, 255, 255]));
