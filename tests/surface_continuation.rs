@@ -49,26 +49,27 @@ fn trace(o: V3, d: V3, with_box: bool, bench_end: f64) -> (f64, Surface) {
         }
         consider((1.6 - o[1]) / d[1], Surface::Hedge);
     }
-    if with_box {
-        // slab test against the box
-        let (lo, hi) = ([0.1, -0.3, 0.5], [0.7, 0.3, 1.3]);
-        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-        for a in 0..3 {
-            if d[a].abs() < 1e-12 {
-                if o[a] < lo[a] || o[a] > hi[a] {
-                    t0 = f64::INFINITY;
-                }
-                continue;
-            }
-            let (ta, tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
-            t0 = t0.max(ta.min(tb));
-            t1 = t1.min(ta.max(tb));
-        }
-        if t0 <= t1 {
-            consider(t0, Surface::Box);
-        }
+    if let Some(t) = with_box.then(|| box_hit(o, d, [0.1, -0.3, 0.5], [0.7, 0.3, 1.3])).flatten() {
+        consider(t, Surface::Box);
     }
     best
+}
+
+/// Where the ray o + t d (t >= 0) enters the axis-aligned box [lo, hi] (slab test), if it does.
+fn box_hit(o: V3, d: V3, lo: V3, hi: V3) -> Option<f64> {
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for a in 0..3 {
+        if d[a].abs() < 1e-12 {
+            if o[a] < lo[a] || o[a] > hi[a] {
+                return None;
+            }
+            continue;
+        }
+        let (ta, tb) = ((lo[a] - o[a]) / d[a], (hi[a] - o[a]) / d[a]);
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    (t0 <= t1).then_some(t0)
 }
 
 /// Each surface's texture: colors far apart from one surface to the next, with detail within.
@@ -369,20 +370,8 @@ fn a_surface_in_front_of_the_removed_object_is_not_continued_into_its_hole() {
                 consider(t, Part::Panel);
             }
         }
-        if with_box {
-            let (lo, hi) = ([0.0, 1.9, 0.0], [1.1, 2.6, 1.0]);
-            let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-            for a in 0..3 {
-                if d[a].abs() < 1e-12 {
-                    continue;
-                }
-                let (ta, tb) = ((lo[a] - center[a]) / d[a], (hi[a] - center[a]) / d[a]);
-                t0 = t0.max(ta.min(tb));
-                t1 = t1.min(ta.max(tb));
-            }
-            if t0 <= t1 {
-                consider(t0, Part::Box);
-            }
+        if let Some(t) = with_box.then(|| box_hit(center, d, [0.0, 1.9, 0.0], [1.1, 2.6, 1.0])).flatten() {
+            consider(t, Part::Box);
         }
         best
     };
