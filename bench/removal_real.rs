@@ -393,14 +393,14 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &st
     md
 }
 
-/// Each scene's strip (bench/results/removal-real-<scene>.png): its first held-out view in each
-/// of `columns` (folders of images named like the views), side by side; then the sheet of every
-/// scene's latest strip; returns the sheet's file name under bench/results.
 /// The contact sheet's columns (input, removal only, cogeo, perfect inpainting, ground truth) and
 /// their largest width in pixels.
 const SHEET_COLUMNS: u32 = 5;
 const SHEET_COLUMN: u32 = 256;
 
+/// Each scene's strip (bench/results/removal-real-<scene>.png): its first held-out view in each
+/// of `columns` (folders of images named like the views), side by side; then the sheet of every
+/// scene's latest strip; returns the sheet's file name under bench/results.
 fn contact_sheet(scenes: &[(&str, Vec<PathBuf>, PathBuf)]) -> String {
     let strip_path = |scene: &str| crate::common::results_path(&format!("removal-real-{scene}.png"));
     for (scene, columns, metrics) in scenes {

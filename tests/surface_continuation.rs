@@ -325,7 +325,7 @@ fn a_nearer_surface_is_not_continued_over_what_the_remaining_gaussians_show_behi
 /// A slanted panel stands in front of a box on textured ground, before a far wall; the box is
 /// removed and the panel kept. The render before removal is known (`front_depth`), so the panel's
 /// pixels beside the hole are found in front of the box (`depth::in_front_of_removed`: 25 of
-/// its 26, and 2 of the other 62), so its plane does not continue into the hole
+/// its 26, and 2 of the other 62), and its plane does not continue into the hole
 /// (`Surfaces::stop_in_front`; on the statue at 504x378 the statue's plane took crosses and bars
 /// of the lawn behind a box in 9 of 25 views). The ground's hole pixels must be completed at the
 /// ground's depth with its texture, and the panel's texture must not reach them.
