@@ -22,7 +22,7 @@
 //! Either model may name its single input and output as it likes.
 
 use super::harmonic::harmonic_fill;
-use super::surfaces::{beside, flanking_at, surfaces_around, Surfaces};
+use super::surfaces::{beside_pixels, flanking_at, surfaces_around, Surfaces};
 use crate::image_ops::{components, feather, resize_bilinear};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
@@ -90,7 +90,7 @@ pub fn in_front_of_removed(
     let mut out = vec![false; w * h];
     let mut depths = Vec::new();
     let r = IN_FRONT_RADIUS;
-    for q in (0..w * h).filter(|&q| known[q] && render_depth[q] > 0.0 && beside(q, hole, w)) {
+    for q in beside_pixels(hole, w).into_iter().filter(|&q| known[q] && render_depth[q] > 0.0) {
         let (x, y) = (q % w, q / w);
         let own = render_depth[q];
         depths.clear();
