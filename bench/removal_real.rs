@@ -161,7 +161,7 @@ pub fn prepare(spec: &RealSpec, factor: &str, iters: &str, data: &Path) -> PathB
 /// cup=1.5` makes the cup's 800x600 photos 533x400, at least the 504 pixels across the issue asks
 /// for and under half the pixels of the whole photos), made once in the bench cache: `images/` as
 /// PNG, resized with a triangle filter spread over the factor (area-like averaging, no ringing),
-/// beside a link to the capture's COLMAP model; the loader scales the intrinsics to the images.
+/// beside links to the rest of the capture; the loader scales the intrinsics to the images.
 fn resampled_capture(spec: &RealSpec, shared: &Path, factor: &str) -> PathBuf {
     let f: f64 = factor.parse().ok().filter(|f: &f64| *f >= 1.0).expect("--real-downscale: a factor of at least 1");
     let dir = crate::common::bench_cache().join(format!("{}-{}-resampled-{factor}", spec.capture, spec.images));
@@ -179,11 +179,12 @@ fn resampled_capture(spec: &RealSpec, shared: &Path, factor: &str) -> PathBuf {
                 let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
                 small.save(images.join(format!("{stem}.png"))).expect("cannot write a resampled photo");
             }
-            for model in
-                ["sparse", "cameras.txt", "images.txt", "points3D.txt", "cameras.bin", "images.bin", "points3D.bin"]
-            {
-                if shared.join(model).exists() {
-                    std::os::unix::fs::symlink(shared.join(model).canonicalize().unwrap(), tmp.join(model)).unwrap();
+            // everything else of the capture (its COLMAP model or transforms.json, in whatever
+            // layout the loader reads) is linked, not listed
+            for e in std::fs::read_dir(shared).expect("the capture's folder") {
+                let e = e.unwrap();
+                if e.file_name() != spec.images {
+                    std::os::unix::fs::symlink(e.path().canonicalize().unwrap(), tmp.join(e.file_name())).unwrap();
                 }
             }
         });
