@@ -382,3 +382,60 @@ fn loss_masks_weigh_each_pixel() {
     assert!(err.contains("1199 weights for an image of 1200 pixels"), "{err}");
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }
+
+/// Per-Gaussian freezing (`Trainer::set_movable`, the removal's refinement): the first step
+/// moves each movable Gaussian exactly as it does without the flags (every Gaussian starts from
+/// the same state, so it gets the same gradient), and the others not at all, over later steps too;
+/// flags of the wrong count, densification and the passes apart are refused.
+#[test]
+fn only_movable_gaussians_step() {
+    use cogeo::scene::GaussianScene;
+    use cogeo::train::trainer::{TrainConfig, Trainer};
+    let (gpu, scene, data) = one_view_scene(12, 300, 1, [1.0, 0.0, 0.2, 0.0]);
+    let movable: Vec<bool> = (0..scene.len()).map(|i| i % 3 == 0).collect();
+    let cfg = || TrainConfig { iters: 10, densify: false, ..Default::default() };
+    let run = |flags: Option<&[bool]>, steps: usize| {
+        let mut t = Trainer::new(&gpu, &data, &scene, cfg()).unwrap();
+        t.trust_radius = Some(1e-2);
+        if let Some(f) = flags {
+            t.set_movable(f).unwrap();
+        }
+        for _ in 0..steps {
+            t.iterate(&data, false).unwrap();
+        }
+        t.download_scene().unwrap()
+    };
+    // one Gaussian's parameters, bit for bit
+    let bits = |s: &GaussianScene, i: usize| {
+        let k = s.sh.len() / s.len();
+        let mut v: Vec<u32> =
+            s.means[i].iter().chain(&s.log_scales[i]).chain(&s.quats[i]).map(|x| x.to_bits()).collect();
+        v.push(s.opacity_logits[i].to_bits());
+        v.extend(s.sh[i * k..(i + 1) * k].iter().map(|x| x.to_bits()));
+        v
+    };
+    let (plain, masked) = (run(None, 1), run(Some(&movable), 1));
+    let moved = (0..scene.len()).filter(|&i| bits(&plain, i) != bits(&scene, i)).count();
+    assert!(moved > 200, "one step moved only {moved} of {} Gaussians", scene.len());
+    for i in 0..scene.len() {
+        let expected = if movable[i] { bits(&plain, i) } else { bits(&scene, i) };
+        assert_eq!(bits(&masked, i), expected, "Gaussian {i} (movable: {})", movable[i]);
+    }
+    let later = run(Some(&movable), 4);
+    for i in (0..scene.len()).filter(|&i| !movable[i]) {
+        assert_eq!(bits(&later, i), bits(&scene, i), "held Gaussian {i} moved over 4 steps");
+    }
+    let moved_later = (0..scene.len()).filter(|&i| movable[i] && bits(&later, i) != bits(&masked, i)).count();
+    assert!(moved_later > 60, "the movable Gaussians stopped after one step ({moved_later} moved on)");
+
+    let mut t = Trainer::new(&gpu, &data, &scene, cfg()).unwrap();
+    let err = t.set_movable(&movable[1..]).unwrap_err().to_string();
+    assert!(err.contains("299 movable flags for 300 Gaussians"), "{err}");
+    t.set_movable(&movable).unwrap();
+    t.fused_step = false;
+    let err = t.iterate(&data, false).unwrap_err().to_string();
+    assert!(err.contains("need the fused step"), "{err}");
+    let mut t = Trainer::new(&gpu, &data, &scene, TrainConfig { densify: true, ..cfg() }).unwrap();
+    assert!(t.set_movable(&movable).is_err(), "densification reorders the Gaussians");
+    assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
+}

@@ -23,6 +23,8 @@ struct FusedAdamParams {
     params: [u64; 5],
     /// (m, v) per group, in the order of `params`.
     moments: [[u64; 2]; 5],
+    /// u32 per Gaussian, 0: no update (`Trainer::set_movable`); 0 and unread when all move.
+    movable: u64,
     steps: [AdamStep; 5],
     opacity_reg: f32,
     scale_reg: f32,
@@ -84,7 +86,8 @@ impl ProjectBackwardAdam {
     /// channel are stepped: the caller guarantees the others have zero moments and get no gradient
     /// (bands not rendered yet), so a step would leave them unchanged. With `trust_radius` each
     /// Gaussian's update of its position, of its log-scales and of its rotation is clipped to that
-    /// norm (as `Adam::record_clipped`). The constants go to one
+    /// norm (as `Adam::record_clipped`). With `movable` (a u32 per Gaussian) only the Gaussians
+    /// it marks nonzero step; the others keep their parameters and moments. The constants go to one
     /// host-visible block: one recording per submission.
     #[allow(clippy::too_many_arguments)]
     pub fn record(
@@ -99,6 +102,7 @@ impl ProjectBackwardAdam {
         step: u32,
         sh_stepped: u32,
         trust_radius: Option<f32>,
+        movable: Option<&Buffer>,
     ) -> Result<()> {
         let n = scene.num_gaussians;
         let tensors = [&scene.means, &scene.log_scales, &scene.quats, &scene.opacity_logits, &scene.sh];
@@ -106,10 +110,12 @@ impl ProjectBackwardAdam {
         let params = FusedAdamParams {
             params: tensors.map(|t| t.address()),
             moments: [0, 1, 2, 3, 4].map(|i| [groups[i].moments.m.address(), groups[i].moments.v.address()]),
+            movable: movable.map_or(0, |b| b.address()),
             steps: [0, 1, 2, 3, 4].map(|i| step_of(&groups[i])),
             opacity_reg: regularizer.0 / n as f32,
             scale_reg: regularizer.1 / (3 * n) as f32,
-            frozen: groups.iter().enumerate().map(|(i, g)| (g.frozen as u32) << i).sum(),
+            frozen: groups.iter().enumerate().map(|(i, g)| (g.frozen as u32) << i).sum::<u32>()
+                | (movable.is_some() as u32) << 5,
             sh_stepped: sh_stepped.min(crate::scene::sh_coeffs(scene.sh_degree) as u32),
             trust_radius: trust_radius.unwrap_or(f32::INFINITY),
             _pad: 0,

@@ -153,6 +153,8 @@ pub struct Trainer {
     /// gradients and running Adam per tensor; on by default.
     pub fused_step: bool,
     fused: ProjectBackwardAdam,
+    /// Set by `set_movable`: a u32 per Gaussian, 0 for one that never steps.
+    movable: Option<Buffer>,
     /// SH coefficients per channel whose Adam moments may be nonzero: those of every band rendered
     /// so far (the fused step leaves the rest alone, an exact no-op for them).
     sh_stepped: u32,
@@ -209,6 +211,7 @@ impl Trainer {
             fused_step: true,
             sh_stepped: 0,
             fused: ProjectBackwardAdam::new(gpu, backward.uses_cas)?,
+            movable: None,
             backward,
             mcmc: McmcPasses::new(gpu)?,
             last_relocation: RelocationStats::default(),
@@ -244,6 +247,25 @@ impl Trainer {
             sums.push(m.iter().map(|&w| w as f64).sum());
         }
         self.loss_masks = Some((Buffer::from_slice(&self.gpu, "loss masks", &all)?, sums));
+        Ok(())
+    }
+
+    /// Only the Gaussians `movable` marks (one flag per Gaussian, in the scene's order) step from
+    /// now on; the others still render and pass gradients on, but their parameters and Adam
+    /// moments never change (the removal's refinement holds the scene away from the holes still).
+    /// Needs the fused step, no densification (it would reorder the Gaussians) and the ADC strategy.
+    pub fn set_movable(&mut self, movable: &[bool]) -> Result<()> {
+        if movable.len() != self.scene.num_gaussians as usize {
+            anyhow::bail!("{} movable flags for {} Gaussians", movable.len(), self.scene.num_gaussians);
+        }
+        if self.cfg.densify {
+            anyhow::bail!("movable Gaussians with densification: it reorders the Gaussians");
+        }
+        if self.cfg.strategy == Strategy::Mcmc {
+            anyhow::bail!("movable Gaussians with the MCMC strategy: its position noise moves every Gaussian");
+        }
+        let flags: Vec<u32> = movable.iter().map(|&m| m as u32).collect();
+        self.movable = Some(Buffer::from_slice(&self.gpu, "movable Gaussians", &flags)?);
         Ok(())
     }
 
@@ -303,6 +325,9 @@ impl Trainer {
         let outputs = self.raster.outputs().unwrap();
         self.sh_stepped = self.sh_stepped.max(sh_coeffs(self.active_sh_degree()) as u32);
         let fused = self.fused_step;
+        if !fused && self.movable.is_some() {
+            anyhow::bail!("movable Gaussians (set_movable) need the fused step");
+        }
         if !fused {
             self.grads.record_zero_parameters(&mut rec);
         }
@@ -404,6 +429,7 @@ impl Trainer {
             self.step,
             stepped,
             self.trust_radius,
+            self.movable.as_ref(),
         )?;
         rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped));
         Ok(())

@@ -20,11 +20,13 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer FusedAdam {
     Floats m_quats; Floats v_quats;
     Floats m_opacity; Floats v_opacity;
     Floats m_sh; Floats v_sh;
+    Uints movable;         // per Gaussian, 0: no update (read only when bit 32 of `frozen` is set)
     AdamStep step_means; AdamStep step_log_scales; AdamStep step_quats; AdamStep step_opacity;
     AdamStep step_sh;      // lr for the DC coefficient, lr_tail for the higher bands
     float opacity_reg;     // 3DGS-MCMC regularizer weights over N (opacity) and 3N (scales); 0 = off
     float scale_reg;
-    uint frozen;           // bits: 1 means, 2 log_scales, 4 quats, 8 opacity, 16 sh (no update)
+    uint frozen;           // bits: 1 means, 2 log_scales, 4 quats, 8 opacity, 16 sh (no update);
+                           // 32: only the Gaussians `movable` marks update
     uint sh_stepped;       // SH coefficients per channel stepped; see main
     float trust_radius;    // each Gaussian's geometry row update clipped to this norm (inf: off)
 };
@@ -44,6 +46,8 @@ void step_element(Floats param, Floats m, Floats v, uint i, float g, AdamStep s,
 void main() {
     uint g = linear_group_id() * 256 + gl_LocalInvocationID.x;
     if (g >= p.num_gaussians) return;
+    // a Gaussian held still: neither it, its moments nor its densification statistics change
+    if ((a.frozen & 32u) != 0u && a.movable.v[g] == 0u) return;
     ParamGrads d;
     parameter_grads(p, b, g, d);  // zero when culled
     // Everything read from the parameter blocks is copied to locals first: the stores below could
