@@ -141,3 +141,45 @@ fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render(
     differ(&crop(&within.weight), &crop(&whole.weight));
     assert!(crop(&whole.weight).iter().filter(|&&x| x > 0.1).count() > 50, "no kept weight in the window");
 }
+
+/// The refinement moves the patch Gaussians (the last of the scene) and those whose centre lands
+/// in some view's hole, however small or large; a centre beside every hole, behind the camera or
+/// outside the image holds still, even when its footprint reaches into a hole
+/// (`movable_gaussians`).
+#[test]
+fn the_gaussians_the_holes_show_and_the_patch_move() {
+    use cogeo::removal::refine::movable_gaussians;
+    use cogeo::scene::GaussianScene;
+    let (a, b) = (test_camera(80, 60), test_camera(40, 30));
+    let hole_a: Vec<bool> =
+        (0..80 * 60).map(|i| (30..40).contains(&(i % 80)) && (20..26).contains(&(i / 80))).collect();
+    let hole_b: Vec<bool> = (0..40 * 30).map(|i| (0..5).contains(&(i % 40)) && (0..5).contains(&(i / 40))).collect();
+    let on =
+        |cam: &cogeo::scene::Camera, x: usize, y: usize, depth: f64| cam.pixel_point(x, y, depth).map(|v| v as f32);
+    let eye = a.pixel_point(10, 10, 0.0);
+    let behind = {
+        let c = a.pixel_point(35, 22, 4.0);
+        [0, 1, 2].map(|k| (2.0 * eye[k] - c[k]) as f32) // mirrored through the eye: behind both cameras
+    };
+    // a footprint of 0.3 px^2 (the renderer's blur alone), and one of 6 px per deviation
+    let (tiny, large) = (-9.0f32, (6.0 * 4.0 / a.fx).ln() as f32);
+    let gaussians = [
+        (on(&a, 35, 22, 4.0), tiny),  // in a's hole
+        (on(&a, 30, 25, 9.0), tiny),  // its corner pixel, farther
+        (on(&a, 39, 21, 4.0), large), // a large one at its right edge
+        (on(&a, 40, 22, 4.0), tiny),  // the pixel right of a's hole
+        (on(&a, 42, 22, 4.0), large), // a large one reaching 12 px into it
+        (on(&b, 2, 3, 3.0), tiny),    // in b's hole only
+        (behind, tiny),
+        (on(&a, 60, 50, 4.0), tiny), // a patch Gaussian beside every hole
+        (on(&a, 35, 22, 4.0), tiny), // a patch Gaussian in the hole
+    ];
+    let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
+    for (m, s) in gaussians {
+        scene.push(m, [s; 3], [1.0, 0.0, 0.0, 0.0], 0.0, &[0.5; 3]);
+    }
+    let movable = movable_gaussians(&scene, &[a.clone(), b.clone()], &[&hole_a, &hole_b], 2);
+    assert_eq!(movable, [true, true, true, false, false, true, false, true, true]);
+    let holes_only = movable_gaussians(&scene, &[a], &[&hole_a], 0);
+    assert_eq!(holes_only, [true, true, true, false, false, false, false, false, true]);
+}

@@ -391,6 +391,8 @@ fn refine_views(
     let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
     let mut masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
     let mut targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
+    let movable =
+        (!opts.refine.all_gaussians).then(|| refine::movable_gaussians(scene, cameras, &holes, patch_gaussians));
     let mut cameras = cameras.to_vec();
     let mut windows = vec![None; cameras.len()];
     if !opts.refine.whole_views {
@@ -407,10 +409,17 @@ fn refine_views(
         }
     }
     let total = opts.refine.iters as usize;
-    let (refined, report) =
-        refine::refine(gpu, scene, &cameras, targets, Some(&masks), extent, &opts.refine_config(), |it| {
-            progress("refine", it as usize, total)
-        })?;
+    let (refined, report) = refine::refine(
+        gpu,
+        scene,
+        &cameras,
+        targets,
+        Some(&masks),
+        movable.as_deref(),
+        extent,
+        &opts.refine_config(),
+        |it| progress("refine", it as usize, total),
+    )?;
     Ok((refined, report, windows))
 }
 

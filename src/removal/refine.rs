@@ -104,6 +104,11 @@ pub struct RefineConfig {
     /// Refine over every view's whole frame instead of its window.
     #[arg(id = "refine-whole-views", long = "refine-whole-views")]
     pub whole_views: bool,
+    /// Let every Gaussian the refined views show move (ablation). By default only the patch
+    /// Gaussians and the Gaussians whose centre some view's hole shows do (`movable_gaussians`);
+    /// the rest of the scene renders unchanged, as trained on the photos.
+    #[arg(id = "refine-all-gaussians", long = "refine-all-gaussians")]
+    pub all_gaussians: bool,
 }
 
 crate::default_from_flags!(RefineConfig);
@@ -118,8 +123,35 @@ pub struct RefineReport {
     /// refinement renders them: a render of every view less.
     pub psnr_before: f64,
     pub psnr_after: Option<f64>,
-    /// The Gaussians some view shows, the ones refined (`seen_by_any`).
+    /// The Gaussians some view shows, the ones the refinement renders (`seen_by_any`).
     pub gaussians_refined: usize,
+    /// Of those, the ones it moved (`movable_gaussians`; all of them with `--refine-all-gaussians`).
+    pub gaussians_moved: usize,
+}
+
+/// The Gaussians the refinement may move: the last `patch` of `scene` (the new ones) and every
+/// other whose centre projects into the hole of one of the views (`cameras`, `holes` of the
+/// cameras' whole images), such as those training left behind the removed objects. The others
+/// hold still: most of their footprint lies outside every hole, where the refinement's target is
+/// the scene's own render, so they need only keep it. Yet Adam moves a parameter by about its
+/// learning rate per step whatever its gradient's size, and at the refinement's raised rates
+/// every Gaussian the windows showed drifted: on the composited cup the refinement ended 3 dB
+/// further from its own targets than it began, and the held-out views lost 0.6 dB outside the
+/// masks. Moving also those whose footprint reaches a hole pixel within two deviations let them
+/// drift again (cup 0.2 dB outside, statue 0.07 dB in the masks; bench/JOURNAL.md, 2026-11-27).
+pub fn movable_gaussians(scene: &GaussianScene, cameras: &[Camera], holes: &[&[bool]], patch: usize) -> Vec<bool> {
+    let first_patch = scene.len() - patch;
+    let in_a_hole = |i: usize| {
+        let m = scene.means[i].map(f64::from);
+        cameras.iter().zip(holes).any(|(cam, hole)| {
+            let Some((x, y, _)) = cam.project_to_image(m) else { return false };
+            let (w, h) = (cam.width as f64, cam.height as f64);
+            (0.0..w).contains(&x) && (0.0..h).contains(&y) && hole[y as usize * cam.width as usize + x as usize]
+        })
+    };
+    let mut movable: Vec<bool> = (0..scene.len()).map(|i| i >= first_patch).collect();
+    crate::parallel::for_each_item(&mut movable, &mut |_, _| {}, |i, m| *m = *m || in_a_hole(i));
+    movable
 }
 
 /// The part of `camera`'s view the refinement needs: the bounding box of its `hole` and of the
@@ -177,7 +209,8 @@ pub fn loss_weights(holes: &[&[bool]], consensus: Option<Vec<Vec<f32>>>, hole_we
 }
 
 /// Refines `scene` towards `targets` (planar RGB per camera), each pixel's loss weighted by
-/// `masks` where given (`loss_weights`). `extent` scales the position learning rate as in training.
+/// `masks` where given (`loss_weights`); only the Gaussians `movable` marks move where it is given.
+/// `extent` scales the position learning rate as in training.
 #[allow(clippy::too_many_arguments)]
 pub fn refine(
     gpu: &Gpu,
@@ -185,6 +218,7 @@ pub fn refine(
     cameras: &[Camera],
     targets: Vec<Vec<f32>>,
     masks: Option<&[Vec<f32>]>,
+    movable: Option<&[bool]>,
     extent: f64,
     cfg: &RefineConfig,
     mut progress: impl FnMut(u32),
@@ -223,6 +257,15 @@ pub fn refine(
     if let Some(m) = masks {
         t.set_loss_masks(m)?;
     }
+    let moved = match movable {
+        Some(movable) => {
+            assert_eq!(movable.len(), scene.len(), "a movable flag per Gaussian");
+            let of_part: Vec<bool> = movable.iter().zip(&seen).filter(|(_, &s)| s || all).map(|(&m, _)| m).collect();
+            t.set_movable(&of_part)?;
+            of_part.iter().filter(|&&m| m).count()
+        }
+        None => t.num_gaussians() as usize,
+    };
     let psnr_before = t.mean_psnr(&data.train)?;
     let frozen_iters = ((cfg.iters as f32) * cfg.frozen_fraction.clamp(0.0, 1.0)).round() as u32;
     while t.step < cfg.iters {
@@ -248,7 +291,15 @@ pub fn refine(
         None => refined,
     };
     let shown = seen.iter().filter(|&&s| s).count();
-    Ok((out, RefineReport { iters: cfg.iters, frozen_iters, psnr_before, psnr_after: None, gaussians_refined: shown }))
+    let report = RefineReport {
+        iters: cfg.iters,
+        frozen_iters,
+        psnr_before,
+        psnr_after: None,
+        gaussians_refined: shown,
+        gaussians_moved: moved,
+    };
+    Ok((out, report))
 }
 
 /// The Gaussians any of `cameras` can show: a superset of what the renderer bins into their
