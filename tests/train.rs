@@ -384,14 +384,21 @@ fn loss_masks_weigh_each_pixel() {
 }
 
 /// Per-Gaussian freezing (`Trainer::set_movable`, the removal's refinement): the first step
-/// moves each movable Gaussian exactly as it does without the flags (every Gaussian starts from
-/// the same state, so it gets the same gradient), and the others not at all, over later steps too;
-/// flags of the wrong count, densification and the passes apart are refused.
+/// moves each movable Gaussian as it does without the flags (every Gaussian starts from the same
+/// state, so it gets the same gradient), and the others not at all, bit for bit, over later steps
+/// too; flags of the wrong count, densification and the passes apart are refused. The gradients
+/// are summed by float atomics in no fixed order, and Adam's first step is about the learning rate
+/// times the gradient's sign, so an element whose gradient is rounding noise can step either way
+/// from run to run: the scales are anisotropic (an isotropic Gaussian's rotation gradient is
+/// nothing but that noise), and a few movable Gaussians may differ from the run without flags.
 #[test]
 fn only_movable_gaussians_step() {
     use cogeo::scene::GaussianScene;
     use cogeo::train::trainer::{TrainConfig, Trainer};
-    let (gpu, scene, data) = one_view_scene(12, 300, 1, [1.0, 0.0, 0.2, 0.0]);
+    let (gpu, mut scene, data) = one_view_scene(12, 300, 1, [1.0, 0.0, 0.2, 0.0]);
+    for (i, s) in scene.log_scales.iter_mut().enumerate() {
+        *s = [-2.2 - 0.1 * (i % 5) as f32, -2.6, -3.0 + 0.2 * (i % 3) as f32];
+    }
     let movable: Vec<bool> = (0..scene.len()).map(|i| i % 3 == 0).collect();
     let cfg = || TrainConfig { iters: 10, densify: false, ..Default::default() };
     let run = |flags: Option<&[bool]>, steps: usize| {
@@ -417,10 +424,15 @@ fn only_movable_gaussians_step() {
     let (plain, masked) = (run(None, 1), run(Some(&movable), 1));
     let moved = (0..scene.len()).filter(|&i| bits(&plain, i) != bits(&scene, i)).count();
     assert!(moved > 200, "one step moved only {moved} of {} Gaussians", scene.len());
-    for i in 0..scene.len() {
-        let expected = if movable[i] { bits(&plain, i) } else { bits(&scene, i) };
-        assert_eq!(bits(&masked, i), expected, "Gaussian {i} (movable: {})", movable[i]);
+    for i in (0..scene.len()).filter(|&i| !movable[i]) {
+        assert_eq!(bits(&masked, i), bits(&scene, i), "held Gaussian {i} moved");
     }
+    let differ = |i: usize| {
+        bits(&masked, i).iter().zip(bits(&plain, i)).any(|(&a, b)| (f32::from_bits(a) - f32::from_bits(b)).abs() > 1e-6)
+    };
+    let off: Vec<usize> = (0..scene.len()).filter(|&i| movable[i] && differ(i)).collect();
+    println!("movable Gaussians whose first step differs from the run without flags: {off:?}");
+    assert!(off.len() <= 2, "{} of 100 movable Gaussians stepped otherwise than without flags: {off:?}", off.len());
     let later = run(Some(&movable), 4);
     for i in (0..scene.len()).filter(|&i| !movable[i]) {
         assert_eq!(bits(&later, i), bits(&scene, i), "held Gaussian {i} moved over 4 steps");
