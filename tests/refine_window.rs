@@ -35,6 +35,12 @@ fn a_window_camera_renders_the_windows_pixels_as_the_whole_view_does() {
     assert!(worst(&part.alpha, &expected_alpha) < 2e-4, "alpha differs by {}", worst(&part.alpha, &expected_alpha));
 }
 
+/// The point 4 units in front of `camera` at pixel (x, y), mirrored through the eye: behind it.
+fn behind_camera(camera: &cogeo::scene::Camera, x: usize, y: usize) -> [f32; 3] {
+    let (c, eye) = (camera.pixel_point(x, y, 4.0), camera.pixel_point(x, y, 0.0));
+    [0, 1, 2].map(|k| (2.0 * eye[k] - c[k]) as f32)
+}
+
 /// The window is the bounding box of the hole and of the patch centres that land in the image,
 /// grown by the margin and clamped to the image; a centre behind the camera or outside the
 /// image does not count, and a view that sees neither has no window.
@@ -45,11 +51,7 @@ fn the_window_holds_the_hole_and_the_patch_the_view_sees() {
     let hole: Vec<bool> = (0..w * h).map(|i| (30..40).contains(&(i % w)) && (20..26).contains(&(i / w))).collect();
     // a patch centre 4 units in front of the camera that lands at a known pixel
     let at = |x: usize, y: usize| camera.pixel_point(x, y, 4.0).map(|v| v as f32);
-    let behind = {
-        let c = camera.pixel_point(10, 10, 4.0);
-        let eye = camera.pixel_point(10, 10, 0.0);
-        [0, 1, 2].map(|k| (2.0 * eye[k] - c[k]) as f32) // mirrored through the eye: behind it
-    };
+    let behind = behind_camera(&camera, 10, 10);
     let far_left = camera.pixel_point(0, 0, 4.0);
     let outside = [0, 1, 2].map(|k| (far_left[k] + 10.0 * (far_left[k] - camera.pixel_point(1, 0, 4.0)[k])) as f32);
     assert!(camera.project_to_image(outside.map(f64::from)).is_none());
@@ -156,12 +158,8 @@ fn the_gaussians_the_holes_show_and_the_patch_move() {
     let hole_b: Vec<bool> = (0..40 * 30).map(|i| (0..5).contains(&(i % 40)) && (0..5).contains(&(i / 40))).collect();
     let on =
         |cam: &cogeo::scene::Camera, x: usize, y: usize, depth: f64| cam.pixel_point(x, y, depth).map(|v| v as f32);
-    let eye = a.pixel_point(10, 10, 0.0);
-    let behind = {
-        let c = a.pixel_point(35, 22, 4.0);
-        [0, 1, 2].map(|k| (2.0 * eye[k] - c[k]) as f32) // mirrored through the eye: behind both cameras
-    };
-    // a footprint of 0.3 px^2 (the renderer's blur alone), and one of 6 px per deviation
+    let behind = behind_camera(&a, 35, 22); // behind b too: the two share their pose
+                                            // a footprint of 0.3 px^2 (the renderer's blur alone), and one of 6 px per deviation
     let (tiny, large) = (-9.0f32, (6.0 * 4.0 / a.fx).ln() as f32);
     let gaussians = [
         (on(&a, 35, 22, 4.0), tiny),  // in a's hole

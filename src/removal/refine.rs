@@ -143,11 +143,7 @@ pub fn movable_gaussians(scene: &GaussianScene, cameras: &[Camera], holes: &[&[b
     let first_patch = scene.len() - patch;
     let in_a_hole = |i: usize| {
         let m = scene.means[i].map(f64::from);
-        cameras.iter().zip(holes).any(|(cam, hole)| {
-            let Some((x, y, _)) = cam.project_to_image(m) else { return false };
-            let (w, h) = (cam.width as f64, cam.height as f64);
-            (0.0..w).contains(&x) && (0.0..h).contains(&y) && hole[y as usize * cam.width as usize + x as usize]
-        })
+        cameras.iter().zip(holes).any(|(cam, hole)| cam.pixel_of(m).is_some_and(|(q, _)| hole[q]))
     };
     let mut movable: Vec<bool> = (0..scene.len()).map(|i| i >= first_patch).collect();
     crate::parallel::for_each_item(&mut movable, &mut |_, _| {}, |i, m| *m = *m || in_a_hole(i));
