@@ -153,8 +153,8 @@ pub struct Trainer {
     /// gradients and running Adam per tensor; on by default.
     pub fused_step: bool,
     fused: ProjectBackwardAdam,
-    /// Set by `set_movable`: a u32 per Gaussian, 0 for one that never steps.
-    movable: Option<Buffer>,
+    /// Set by `set_movable`: a u32 per Gaussian, 0 for one that never steps; and how many step.
+    movable: Option<(Buffer, u32)>,
     /// SH coefficients per channel whose Adam moments may be nonzero: those of every band rendered
     /// so far (the fused step leaves the rest alone, an exact no-op for them).
     sh_stepped: u32,
@@ -265,7 +265,8 @@ impl Trainer {
             anyhow::bail!("movable Gaussians with the MCMC strategy: its position noise moves every Gaussian");
         }
         let flags: Vec<u32> = movable.iter().map(|&m| m as u32).collect();
-        self.movable = Some(Buffer::from_slice(&self.gpu, "movable Gaussians", &flags)?);
+        let moving = flags.iter().sum();
+        self.movable = Some((Buffer::from_slice(&self.gpu, "movable Gaussians", &flags)?, moving));
         Ok(())
     }
 
@@ -429,9 +430,16 @@ impl Trainer {
             self.step,
             stepped,
             self.trust_radius,
-            self.movable.as_ref(),
+            self.movable.as_ref().map(|(flags, _)| flags),
         )?;
-        rec.mark_moved("project backward + adam", s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped));
+        // a held Gaussian reads its flag only
+        let bytes = match self.movable {
+            Some((_, moving)) => {
+                moving as u64 * super::fused::bytes_per_gaussian(stepped) + 4 * (s.num_gaussians - moving) as u64
+            }
+            None => s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped),
+        };
+        rec.mark_moved("project backward + adam", bytes);
         Ok(())
     }
 
