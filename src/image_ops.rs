@@ -50,6 +50,23 @@ pub fn sample_bilinear_rgb(img: &[f32], w: usize, h: usize, x: f64, y: f64) -> [
     })
 }
 
+/// The planar RGB `img` of `n` pixels as one [r, g, b] per pixel, for `sample_bilinear_pixels`.
+pub fn interleave_rgb(img: &[f32], n: usize) -> Vec<[f32; 3]> {
+    (0..n).map(|i| [img[i], img[n + i], img[2 * n + i]]).collect()
+}
+
+/// `sample_bilinear_rgb` of an image stored as one [r, g, b] per pixel (`interleave_rgb`): the
+/// same arithmetic, so the same bits, with a sample's four pixels in two cache lines instead of
+/// six (the photo-consistent depth samples every view ~130 times per hole pixel).
+pub fn sample_bilinear_pixels(img: &[[f32; 3]], w: usize, h: usize, x: f64, y: f64) -> [f32; 3] {
+    let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
+    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+    let (a, b, c, d) = (img[y0 * w + x0], img[y0 * w + x1], img[y1 * w + x0], img[y1 * w + x1]);
+    std::array::from_fn(|ch| (1.0 - fy) * ((1.0 - fx) * a[ch] + fx * b[ch]) + fy * ((1.0 - fx) * c[ch] + fx * d[ch]))
+}
+
 /// The Lanczos kernel with a = 3: sinc(t) sinc(t / 3) for |t| < 3, else 0.
 fn lanczos3(t: f64) -> f64 {
     if t.abs() < 1e-9 {
@@ -414,7 +431,7 @@ pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>)
 mod tests {
     use super::*;
 
-    /// The three-channel sampler gives each channel's `sample_bilinear` exactly, edges included.
+    /// The three-channel samplers give each channel's `sample_bilinear` exactly, edges included.
     #[test]
     fn bilinear_rgb_is_the_per_channel_bilinear() {
         let (w, h) = (7, 5);
@@ -426,6 +443,11 @@ mod tests {
             for (c, &v) in rgb.iter().enumerate() {
                 assert_eq!(v.to_bits(), sample_bilinear(&img, w, h, c, x, y).to_bits(), "({x}, {y}) channel {c}");
             }
+            // and the interleaved image's sampler, bit for bit
+            assert_eq!(
+                sample_bilinear_pixels(&interleave_rgb(&img, w * h), w, h, x, y).map(f32::to_bits),
+                rgb.map(f32::to_bits)
+            );
         }
     }
 

@@ -548,7 +548,8 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
             }
         })
         .collect();
-    let report = correct_hole_depth(0, &cams[0], &mut completed, &hole, &sources, 0.05);
+    let interleaved: Vec<Vec<[f32; 3]>> = photos.iter().map(|p| cogeo::image_ops::interleave_rgb(p, w * h)).collect();
+    let report = correct_hole_depth(0, &cams[0], &mut completed, &hole, &sources, &interleaved, 0.05);
     // of the 1152 hole pixels, those inside the images of at least two sources
     assert!(report.pixels > 1000, "{report:?}");
     assert!(report.cost_after < 0.05 * report.cost_before, "{report:?}");
@@ -570,7 +571,7 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     // 8 % too near is beyond the 5 % searched: the least cost lies at the end of the range, which
     // is no minimum, and the depth stays as it was
     let mut far_off: Vec<f32> = (0..w * h).map(|p| if hole[p] { 4.6 } else { 5.0 }).collect();
-    let report = correct_hole_depth(0, &cams[0], &mut far_off, &hole, &sources, 0.2);
+    let report = correct_hole_depth(0, &cams[0], &mut far_off, &hole, &sources, &interleaved, 0.2);
     assert!(report.pixels > 1000 && report.scale == 1.0, "{report:?}");
     assert!((0..w * h).all(|p| far_off[p] == if hole[p] { 4.6 } else { 5.0 }));
 }

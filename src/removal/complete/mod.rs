@@ -31,6 +31,7 @@ pub mod surfaces;
 pub mod transfer;
 
 use crate::gpu::Gpu;
+use crate::image_ops::interleave_rgb;
 use crate::parallel::for_each_item;
 use crate::planes::Plane;
 use crate::scene::Camera;
@@ -286,8 +287,10 @@ impl Completer {
     ) -> Vec<DepthScale> {
         let mut views: Vec<(&mut Completed, DepthScale)> =
             completed.iter_mut().map(|c| (c, DepthScale::unchanged())).collect();
+        let photos: Vec<Vec<[f32; 3]>> = sources.iter().map(|s| interleave_rgb(s.photo, s.photo.len() / 3)).collect();
         for_each_item(&mut views, progress, |i, (c, scale)| {
-            *scale = correct_hole_depth(i, &cameras[i], &mut c.depth, holes[i], sources, PHOTO_DEPTH_TOLERANCE);
+            let (depth, hole) = (&mut c.depth, holes[i]);
+            *scale = correct_hole_depth(i, &cameras[i], depth, hole, sources, &photos, PHOTO_DEPTH_TOLERANCE);
         });
         views.into_iter().map(|(_, scale)| scale).collect()
     }

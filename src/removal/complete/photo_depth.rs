@@ -15,7 +15,7 @@
 //! colors from 24.7 to 27.7 dB against the exact truth.
 
 use super::source_views::{back_project, sees, SourceView};
-use crate::image_ops::sample_bilinear_rgb;
+use crate::image_ops::sample_bilinear_pixels;
 use crate::scene::Camera;
 
 /// The factor found for one view's hole depth.
@@ -59,6 +59,8 @@ const FADE_PIXELS: usize = 8;
 /// reads them ~130 times per pixel.
 struct SeenPixels<'a> {
     sources: &'a [SourceView<'a>],
+    /// The sources' photos, one [r, g, b] per pixel (`interleave_rgb`).
+    photos: &'a [Vec<[f32; 3]>],
     pixels: Vec<usize>,
     views: Vec<u32>,
     /// Per entry of `views`: the pixel's point in that view's camera frame at depth factor s is
@@ -82,7 +84,7 @@ impl SeenPixels<'_> {
             if s.hole[y as usize * sw + x as usize] {
                 continue;
             }
-            let rgb = sample_bilinear_rgb(s.photo, sw, sh, x, y);
+            let rgb = sample_bilinear_pixels(&self.photos[j as usize], sw, sh, x, y);
             for c in 0..3 {
                 let v = rgb[c] as f64;
                 sum[c] += v;
@@ -136,13 +138,15 @@ fn parabola_minimum(scales: &[f64], costs: &[f64]) -> Option<f64> {
 /// within `LOCAL_RANGE` of it, from the costs of a window around the pixel (two removed objects
 /// leave holes at different distances, with different biases). Pixels no two views saw take the
 /// correction of the nearest one that was, fading out over `FADE_PIXELS` (so the surface stays
-/// continuous where it is measured, and is left alone where nothing was seen twice).
+/// continuous where it is measured, and is left alone where nothing was seen twice). `photos`
+/// are the sources' photos as `interleave_rgb` stores them.
 pub fn correct_hole_depth(
     target: usize,
     camera: &Camera,
     depth: &mut [f32],
     hole: &[bool],
     sources: &[SourceView],
+    photos: &[Vec<[f32; 3]>],
     tolerance: f64,
 ) -> DepthScale {
     let w = camera.width as usize;
@@ -166,7 +170,7 @@ pub fn correct_hole_depth(
             lines.truncate(start);
         }
     }
-    let seen = SeenPixels { sources, pixels, views, lines, starts };
+    let seen = SeenPixels { sources, photos, pixels, views, lines, starts };
     let n = seen.pixels.len();
     let unchanged = DepthScale { pixels: n, ..DepthScale::unchanged() };
     if n < MIN_PIXELS {
