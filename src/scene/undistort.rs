@@ -12,7 +12,7 @@
 
 use super::camera::Camera;
 use super::lens::{ColmapIntrinsics, Lens};
-use crate::image_ops::sample_lanczos3;
+use crate::image_ops::sample_lanczos3_rgb;
 use anyhow::{bail, Result};
 
 /// How one photo becomes its pinhole image. Small: the per-pixel source positions are recomputed
@@ -95,8 +95,8 @@ impl Undistortion {
         let mut out = vec![0f32; 3 * n];
         for i in 0..n {
             let (x, y) = self.source_position(i);
-            for c in 0..3 {
-                out[c * n + i] = sample_lanczos3(photo, w, h, c, x, y).clamp(0.0, 1.0);
+            for (c, v) in sample_lanczos3_rgb(photo, w, h, x, y).into_iter().enumerate() {
+                out[c * n + i] = v.clamp(0.0, 1.0);
             }
         }
         out

@@ -6,7 +6,7 @@
 //! depth guidance pays off in color, not just in geometry.
 
 use super::source_views::{back_project, sees, SourceView};
-use crate::image_ops::{bounding_box, box_count, box_max, box_sum, sample_lanczos3};
+use crate::image_ops::{bounding_box, box_count, box_max, box_sum, sample_lanczos3_rgb};
 use crate::scene::exposure::ColorAffine;
 use crate::scene::Camera;
 
@@ -98,7 +98,7 @@ pub fn transfer(
             let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
             // Lanczos, not bilinear: a transferred checkerboard keeps its edges (held-out
             // seen-elsewhere PSNR +0.3 dB on the bench scenes)
-            let rgb = std::array::from_fn(|c| sample_lanczos3(s.photo, sw, sh, c, x, y) as f64);
+            let rgb = sample_lanczos3_rgb(s.photo, sw, sh, x, y).map(f64::from);
             if j == target {
                 own[p] = Some(rgb);
             } else {
@@ -248,8 +248,8 @@ pub fn borrow_inventions(
             if !inv.invented[q] || (z - d).abs() > tolerance * d {
                 continue;
             }
-            for c in 0..3 {
-                out.rgb[c * w * h + p] = sample_lanczos3(&inv.rgb, iw, ih, c, x, y).clamp(0.0, 1.0);
+            for (c, v) in sample_lanczos3_rgb(&inv.rgb, iw, ih, x, y).into_iter().enumerate() {
+                out.rgb[c * w * h + p] = v.clamp(0.0, 1.0);
             }
             out.found[p] = true;
             break;
