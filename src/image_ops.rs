@@ -25,29 +25,45 @@ pub fn resize_bilinear(src: &[f32], w: usize, h: usize, channels: usize, nw: usi
     out
 }
 
+/// The four pixels a bilinear sample at (x, y) blends (row-major indices of (x0, y0), (x1, y0),
+/// (x0, y1), (x1, y1), clamped to the edge pixels) and its fractions: what the samplers below
+/// share, so that they give the same bits.
+struct BilinearTaps {
+    at: [usize; 4],
+    fx: f32,
+    fy: f32,
+}
+
+impl BilinearTaps {
+    #[inline]
+    fn new(w: usize, h: usize, x: f64, y: f64) -> BilinearTaps {
+        let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
+        BilinearTaps { at: [y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1], fx, fy }
+    }
+
+    /// The sample of the values `v` at the four pixels, in `at`'s order.
+    #[inline]
+    fn blend(&self, v: [f32; 4]) -> f32 {
+        let (fx, fy) = (self.fx, self.fy);
+        (1.0 - fy) * ((1.0 - fx) * v[0] + fx * v[1]) + fy * ((1.0 - fx) * v[2] + fx * v[3])
+    }
+}
+
 /// Channel `c` of the planar image `img` (w x h) at the continuous point (x, y), pixel (px, py)
 /// centered at (px + 0.5, py + 0.5): bilinear, clamped to the edge pixels.
 pub fn sample_bilinear(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64) -> f32 {
-    let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-    let p = |xx: usize, yy: usize| img[c * w * h + yy * w + xx];
-    (1.0 - fy) * ((1.0 - fx) * p(x0, y0) + fx * p(x1, y0)) + fy * ((1.0 - fx) * p(x0, y1) + fx * p(x1, y1))
+    let taps = BilinearTaps::new(w, h, x, y);
+    taps.blend(taps.at.map(|q| img[c * w * h + q]))
 }
 
 /// `sample_bilinear` of all three channels of the planar RGB `img`, the taps and weights found
 /// once (the same arithmetic per channel, so the same values).
 pub fn sample_bilinear_rgb(img: &[f32], w: usize, h: usize, x: f64, y: f64) -> [f32; 3] {
-    let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-    let (a, b, c, d) = (y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1);
-    std::array::from_fn(|ch| {
-        let plane = &img[ch * w * h..(ch + 1) * w * h];
-        (1.0 - fy) * ((1.0 - fx) * plane[a] + fx * plane[b]) + fy * ((1.0 - fx) * plane[c] + fx * plane[d])
-    })
+    let taps = BilinearTaps::new(w, h, x, y);
+    std::array::from_fn(|ch| taps.blend(taps.at.map(|q| img[ch * w * h + q])))
 }
 
 /// The planar RGB `img` of `n` pixels as one [r, g, b] per pixel, for `sample_bilinear_pixels`.
@@ -59,12 +75,9 @@ pub fn interleave_rgb(img: &[f32], n: usize) -> Vec<[f32; 3]> {
 /// same arithmetic, so the same bits, with a sample's four pixels in two cache lines instead of
 /// six (the photo-consistent depth samples every view ~130 times per hole pixel).
 pub fn sample_bilinear_pixels(img: &[[f32; 3]], w: usize, h: usize, x: f64, y: f64) -> [f32; 3] {
-    let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
-    let (x0, y0) = (x.floor() as usize, y.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
-    let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
-    let (a, b, c, d) = (img[y0 * w + x0], img[y0 * w + x1], img[y1 * w + x0], img[y1 * w + x1]);
-    std::array::from_fn(|ch| (1.0 - fy) * ((1.0 - fx) * a[ch] + fx * b[ch]) + fy * ((1.0 - fx) * c[ch] + fx * d[ch]))
+    let taps = BilinearTaps::new(w, h, x, y);
+    let v = taps.at.map(|q| img[q]);
+    std::array::from_fn(|ch| taps.blend(v.map(|p| p[ch])))
 }
 
 /// The Lanczos kernel with a = 3: sinc(t) sinc(t / 3) for |t| < 3, else 0.
@@ -79,22 +92,40 @@ fn lanczos3(t: f64) -> f64 {
     }
 }
 
+/// The 6 x 6 taps of a Lanczos-3 sample at (x, y): each column's and row's pixel (clamped to the
+/// image) and kernel weight; shared by the samplers below, so that they give the same bits.
+struct Lanczos3Taps {
+    xs: [usize; 6],
+    ys: [usize; 6],
+    kx: [f64; 6],
+    ky: [f64; 6],
+}
+
+impl Lanczos3Taps {
+    #[inline]
+    fn new(w: usize, h: usize, x: f64, y: f64) -> Lanczos3Taps {
+        let (x, y) = (x - 0.5, y - 0.5);
+        let (x0, y0) = (x.floor() as isize, y.floor() as isize);
+        Lanczos3Taps {
+            xs: std::array::from_fn(|i| (x0 + i as isize - 2).clamp(0, w as isize - 1) as usize),
+            ys: std::array::from_fn(|j| (y0 + j as isize - 2).clamp(0, h as isize - 1) as usize),
+            kx: std::array::from_fn(|i| lanczos3(x - (x0 + i as isize - 2) as f64)),
+            ky: std::array::from_fn(|j| lanczos3(y - (y0 + j as isize - 2) as f64)),
+        }
+    }
+}
+
 /// Channel `c` of the planar image `img` (w x h) at the continuous point (x, y), pixel centers at
 /// (px + 0.5, py + 0.5): Lanczos-3 (6 x 6 taps, weights normalized, edges clamped). Exact at pixel
 /// centers, and much sharper than bilinear between them: bilinear halfway between two pixels
 /// averages them, which loses a quarter of a checkerboard's contrast at 4 pixels per square. It may
 /// overshoot the neighbours' range slightly (ringing at steps).
 pub fn sample_lanczos3(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64) -> f32 {
-    let (x, y) = (x - 0.5, y - 0.5);
-    let (x0, y0) = (x.floor() as isize, y.floor() as isize);
-    let kx: [f64; 6] = std::array::from_fn(|i| lanczos3(x - (x0 + i as isize - 2) as f64));
-    let ky: [f64; 6] = std::array::from_fn(|j| lanczos3(y - (y0 + j as isize - 2) as f64));
+    let t = Lanczos3Taps::new(w, h, x, y);
     let plane = &img[c * w * h..(c + 1) * w * h];
     let (mut sum, mut weight) = (0.0, 0.0);
-    for (j, wy) in ky.iter().enumerate() {
-        let yy = (y0 + j as isize - 2).clamp(0, h as isize - 1) as usize;
-        for (i, wx) in kx.iter().enumerate() {
-            let xx = (x0 + i as isize - 2).clamp(0, w as isize - 1) as usize;
+    for (&yy, wy) in t.ys.iter().zip(&t.ky) {
+        for (&xx, wx) in t.xs.iter().zip(&t.kx) {
             sum += wx * wy * plane[yy * w + xx] as f64;
             weight += wx * wy;
         }
@@ -106,16 +137,11 @@ pub fn sample_lanczos3(img: &[f32], w: usize, h: usize, c: usize, x: f64, y: f64
 /// weights (24 sines) computed once, not per channel; each channel's sum in the same order, so the
 /// same bits.
 pub fn sample_lanczos3_rgb(img: &[f32], w: usize, h: usize, x: f64, y: f64) -> [f32; 3] {
-    let (x, y) = (x - 0.5, y - 0.5);
-    let (x0, y0) = (x.floor() as isize, y.floor() as isize);
-    let kx: [f64; 6] = std::array::from_fn(|i| lanczos3(x - (x0 + i as isize - 2) as f64));
-    let ky: [f64; 6] = std::array::from_fn(|j| lanczos3(y - (y0 + j as isize - 2) as f64));
+    let t = Lanczos3Taps::new(w, h, x, y);
     let n = w * h;
     let (mut sum, mut weight) = ([0.0f64; 3], 0.0);
-    for (j, wy) in ky.iter().enumerate() {
-        let yy = (y0 + j as isize - 2).clamp(0, h as isize - 1) as usize;
-        for (i, wx) in kx.iter().enumerate() {
-            let xx = (x0 + i as isize - 2).clamp(0, w as isize - 1) as usize;
+    for (&yy, wy) in t.ys.iter().zip(&t.ky) {
+        for (&xx, wx) in t.xs.iter().zip(&t.kx) {
             let q = yy * w + xx;
             for (c, s) in sum.iter_mut().enumerate() {
                 *s += wx * wy * img[c * n + q] as f64;
@@ -461,6 +487,7 @@ mod tests {
     fn bilinear_rgb_is_the_per_channel_bilinear() {
         let (w, h) = (7, 5);
         let img: Vec<f32> = (0..3 * w * h).map(|i| ((i * 37 % 101) as f32) / 101.0).collect();
+        let pixels = interleave_rgb(&img, w * h);
         let mut rng = crate::rng::Rng::new(3);
         for _ in 0..500 {
             let (x, y) = (rng.uniform() * (w as f64 + 2.0) - 1.0, rng.uniform() * (h as f64 + 2.0) - 1.0);
@@ -469,10 +496,7 @@ mod tests {
                 assert_eq!(v.to_bits(), sample_bilinear(&img, w, h, c, x, y).to_bits(), "({x}, {y}) channel {c}");
             }
             // and the interleaved image's sampler, bit for bit
-            assert_eq!(
-                sample_bilinear_pixels(&interleave_rgb(&img, w * h), w, h, x, y).map(f32::to_bits),
-                rgb.map(f32::to_bits)
-            );
+            assert_eq!(sample_bilinear_pixels(&pixels, w, h, x, y).map(f32::to_bits), rgb.map(f32::to_bits));
             // the three-channel Lanczos, bit for bit each channel's
             let lanczos = sample_lanczos3_rgb(&img, w, h, x, y);
             for (c, &v) in lanczos.iter().enumerate() {

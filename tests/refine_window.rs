@@ -158,8 +158,9 @@ fn the_gaussians_the_holes_show_and_the_patch_move() {
     let hole_b: Vec<bool> = (0..40 * 30).map(|i| (0..5).contains(&(i % 40)) && (0..5).contains(&(i / 40))).collect();
     let on =
         |cam: &cogeo::scene::Camera, x: usize, y: usize, depth: f64| cam.pixel_point(x, y, depth).map(|v| v as f32);
-    let behind = behind_camera(&a, 35, 22); // behind b too: the two share their pose
-                                            // a footprint of 0.3 px^2 (the renderer's blur alone), and one of 6 px per deviation
+    // behind b too: the two share their pose
+    let behind = behind_camera(&a, 35, 22);
+    // a footprint of 0.3 px^2 (the renderer's blur alone), and one of 6 px per deviation
     let (tiny, large) = (-9.0f32, (6.0 * 4.0 / a.fx).ln() as f32);
     let gaussians = [
         (on(&a, 35, 22, 4.0), tiny),  // in a's hole

@@ -20,7 +20,7 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer FusedAdam {
     Floats m_quats; Floats v_quats;
     Floats m_opacity; Floats v_opacity;
     Floats m_sh; Floats v_sh;
-    Uints movable;         // per Gaussian, 0: no update (read only when `frozen` has its 32 bit)
+    Uints movable;         // per Gaussian, 0: no update (read only when `frozen & 32` is set)
     AdamStep step_means; AdamStep step_log_scales; AdamStep step_quats; AdamStep step_opacity;
     AdamStep step_sh;      // lr for the DC coefficient, lr_tail for the higher bands
     float opacity_reg;     // 3DGS-MCMC regularizer weights over N (opacity) and 3N (scales); 0 = off
