@@ -10,21 +10,22 @@
 use super::adam::{Adam, Moments};
 use super::exposure::ViewExposures;
 use super::fused::{GroupStep, ProjectBackwardAdam};
-use super::loss::{reference as loss_ref, LossInputs, PhotometricLoss};
+use super::loss::{LossInputs, PhotometricLoss};
 use super::mcmc::{self, McmcPasses, RelocationStats};
-use crate::eval::render_psnr;
 use crate::gpu::{Buffer, Gpu, Recorder};
 use crate::render::backward::{Backward, PixelGradients, SceneGradients};
 use crate::render::{Rasterizer, RenderSettings, SceneBuffers};
 use crate::rng::Rng;
 use crate::scene::colmap::Point3D;
-use crate::scene::dataset::{Dataset, View};
-use crate::scene::exposure::ColorAffine;
+use crate::scene::dataset::Dataset;
 use crate::scene::{logit, sh_coeffs, GaussianScene, SH_C0};
 use anyhow::{bail, Result};
 
 mod adc;
+mod evaluate;
 mod exposure_maps;
+
+pub use evaluate::Metrics;
 
 pub use super::config::{Strategy, TrainConfig};
 
@@ -99,18 +100,6 @@ impl GroupMoments {
             sh: Moments::new(gpu, "sh", 3 * k * n)?,
         })
     }
-}
-
-/// Mean image metrics of views against their photos: raw (the render as it is) and with each
-/// view's exposure map fitted by least squares on all its pixels (12 numbers against thousands of
-/// pixels), which scores the scene without its views' exposure differences.
-#[derive(Clone, Debug, Default, serde::Serialize)]
-pub struct Metrics {
-    pub psnr: f64,
-    pub ssim: f64,
-    pub psnr_exposure_fitted: f64,
-    pub ssim_exposure_fitted: f64,
-    pub views: usize,
 }
 
 pub struct Trainer {
@@ -554,52 +543,6 @@ impl Trainer {
         let (out, keep, stats) = mcmc::relocate_and_grow(&scene, self.cfg.max_gaussians, &mut self.rng)?;
         self.last_relocation = stats;
         self.replace_scene(&out, &keep)
-    }
-
-    /// How `evaluate` and `mean_psnr` render: the training's background, the current SH degree.
-    fn evaluation_settings(&self) -> RenderSettings {
-        RenderSettings {
-            background: self.cfg.background,
-            sh_degree: Some(self.active_sh_degree()),
-            ..Default::default()
-        }
-    }
-
-    /// The mean over `views` of `evaluate`'s raw PSNR alone: without SSIM and the exposure-fitted
-    /// scores, whose CPU work was most of the time of the removal's two evaluations.
-    pub fn mean_psnr(&mut self, views: &[View]) -> Result<f64> {
-        let settings = self.evaluation_settings();
-        let mut sum = 0.0;
-        for v in views {
-            sum += render_psnr(&self.raster.render(&self.scene, &v.camera, &settings)?.rgb, &v.image);
-        }
-        Ok(if views.is_empty() { 0.0 } else { sum / views.len() as f64 })
-    }
-
-    /// Renders `views` and compares them with their images: mean PSNR and SSIM.
-    pub fn evaluate(&mut self, views: &[View]) -> Result<Metrics> {
-        let mut metrics = Metrics { views: views.len(), ..Default::default() };
-        if views.is_empty() {
-            return Ok(metrics);
-        }
-        let settings = self.evaluation_settings();
-        let n = views.len() as f64;
-        for v in views {
-            let out = self.raster.render(&self.scene, &v.camera, &settings)?;
-            let (w, h) = (out.width as usize, out.height as usize);
-            let clamped: Vec<f32> = out.rgb.iter().map(|&c| c.clamp(0.0, 1.0)).collect();
-            let fitted = ColorAffine::fitted_render(&clamped, &v.image, None);
-            for (rgb, psnr, ssim) in [
-                (&clamped, &mut metrics.psnr, &mut metrics.ssim),
-                (&fitted, &mut metrics.psnr_exposure_fitted, &mut metrics.ssim_exposure_fitted),
-            ] {
-                *psnr += render_psnr(rgb, &v.image) / n;
-                let x: Vec<f64> = rgb.iter().map(|&c| c.clamp(0.0, 1.0) as f64).collect();
-                let y: Vec<f64> = v.image.iter().map(|&c| c as f64).collect();
-                *ssim += loss_ref::ssim(&x, &y, w, h, None) / n;
-            }
-        }
-        Ok(metrics)
     }
 
     /// Restores the optimizer position after a resume.
