@@ -309,8 +309,6 @@ pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>)
 mod tests {
     use super::*;
 
-    /// The three-channel samplers give each channel's `sample_bilinear` (`sample_lanczos3`)
-    /// exactly, edges included.
     #[test]
     fn box_sum_counts_the_window_cut_at_the_borders() {
         // a plane of ones gives each pixel the size of its window; one channel of index values
