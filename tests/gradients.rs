@@ -21,6 +21,9 @@ struct Weights {
     depth: Vec<f32>,
     expected_depth: Vec<f32>,
     features: Vec<f32>,
+    /// Only the RGB weights are nonzero, and the backward gets no alpha or depth gradients at all
+    /// (as in training): blend_backward's COLOR_ONLY variant.
+    color_only: bool,
 }
 
 fn weights(hw: usize, d: usize, seed: u64) -> Weights {
@@ -32,7 +35,14 @@ fn weights(hw: usize, d: usize, seed: u64) -> Weights {
         depth: v(hw, 0.3),
         expected_depth: v(hw, 0.3),
         features: v(d * hw, 1.0),
+        color_only: false,
     }
+}
+
+/// `weights` with the alpha and depth weights zero, for the color-only backward.
+fn color_weights(hw: usize, seed: u64) -> Weights {
+    let w = weights(hw, 0, seed);
+    Weights { alpha: vec![0.0; hw], depth: vec![0.0; hw], expected_depth: vec![0.0; hw], color_only: true, ..w }
 }
 
 fn loss(scene: &GaussianScene, cam: &Camera, bg: [f64; 3], w: &Weights, features: Option<(&[f32], usize)>) -> f64 {
@@ -112,9 +122,9 @@ fn gpu_gradients(
     let features = feats.map(|_| up(&w.features));
     let upstream = PixelGradients {
         rgb: &rgb,
-        alpha: Some(&alpha),
-        depth: Some(&depth),
-        expected_depth: Some(&ed),
+        alpha: (!w.color_only).then_some(&alpha),
+        depth: (!w.color_only).then_some(&depth),
+        expected_depth: (!w.color_only).then_some(&ed),
         features: features.as_ref(),
     };
     let mut rec = Recorder::new(&g).unwrap();
@@ -240,13 +250,16 @@ fn check_group(c: &GroupCheck) {
 }
 
 fn run_gradient_check(degree: u32, cas: bool, seed: u64) {
+    let hw = (camera().width * camera().height) as usize;
+    check_against_finite_differences(degree, cas, seed, &weights(hw, 0, seed + 1));
+}
+
+fn check_against_finite_differences(degree: u32, cas: bool, seed: u64, w: &Weights) {
     let scene = scene(seed, 24, degree);
     let cam = camera();
     let bg = [0.3f32, 0.5, 0.7];
     let bgd = bg.map(|v| v as f64);
-    let hw = (cam.width * cam.height) as usize;
-    let w = weights(hw, 0, seed + 1);
-    let g = gpu_gradients(&scene, &cam, bg, &w, None, cas, None);
+    let g = gpu_gradients(&scene, &cam, bg, w, None, cas, None);
     let n = scene.len();
     let k = scene.sh_coeffs();
     let groups: Vec<(&'static str, Vec<f32>, Vec<Param>)> = vec![
@@ -257,9 +270,33 @@ fn run_gradient_check(degree: u32, cas: bool, seed: u64) {
         ("sh", g.sh, (0..n * k * 3).map(Param::Sh).collect()),
     ];
     for (name, gpu_values, params) in groups {
-        let problem = Problem { scene: &scene, feats: &[], dim: 0, cam: &cam, bg: bgd, w: &w };
+        let problem = Problem { scene: &scene, feats: &[], dim: 0, cam: &cam, bg: bgd, w };
         let (fd, skipped) = problem.fd_group(&params);
         check_group(&GroupCheck { name, gpu: gpu_values, fd, skipped });
+    }
+}
+
+#[test]
+fn color_only_gradients_match_finite_differences() {
+    // a loss of the colors alone, as training's: the backward runs its COLOR_ONLY variant, which
+    // leaves out the alpha and depth terms
+    let hw = (camera().width * camera().height) as usize;
+    for (degree, cas, seed) in [(1, false, 15), (0, true, 16)] {
+        check_against_finite_differences(degree, cas, seed, &color_weights(hw, seed + 1));
+    }
+    // and the same sums as the full pass fed zero alpha and depth gradients, up to the order of
+    // the atomic adds
+    let (scene, cam, bg) = (scene(17, 60, 1), camera(), [0.2f32, 0.1, 0.4]);
+    let only = color_weights(hw, 18);
+    let zeros = Weights { color_only: false, ..color_weights(hw, 18) };
+    let a = gpu_gradients(&scene, &cam, bg, &only, None, false, None);
+    let b = gpu_gradients(&scene, &cam, bg, &zeros, None, false, None);
+    for (name, x, y) in
+        [("means", &a.means, &b.means), ("log_scales", &a.log_scales, &b.log_scales), ("sh", &a.sh, &b.sh)]
+    {
+        let scale = y.iter().fold(0f32, |m, v| m.max(v.abs()));
+        let err = x.iter().zip(y.iter()).fold(0f32, |m, (p, q)| m.max((p - q).abs()));
+        assert!(scale > 0.0 && err <= 1e-6 * scale, "{name}: color-only against full, max difference {err} of {scale}");
     }
 }
 
@@ -307,13 +344,12 @@ fn blend_backward_pixel_layouts_agree() {
     // The blend backward gives each invocation a block of 1..16 x 1..2 pixels
     // (render::BlendLayout::for_device picks per device); every layout must give the gradients of the
     // device's own, which the finite-difference tests above check. The camera's 44x34 leaves partial
-    // tiles and columns.
+    // tiles and columns. The color-only variant likewise.
     let scene = scene(31, 60, 1);
     let cam = camera();
     let hw = (cam.width * cam.height) as usize;
-    let w = weights(hw, 0, 32);
     let bg = [0.2f32, 0.1, 0.4];
-    for cas in [false, true] {
+    for (w, cas) in [(weights(hw, 0, 32), false), (weights(hw, 0, 32), true), (color_weights(hw, 33), false)] {
         let reference = gpu_gradients(&scene, &cam, bg, &w, None, cas, None);
         let groups = |g: &GpuGradients| {
             [g.means.clone(), g.log_scales.clone(), g.quats.clone(), g.opacity_logits.clone(), g.sh.clone()]
@@ -325,7 +361,11 @@ fn blend_backward_pixel_layouts_agree() {
                 let scale = b.iter().fold(0f32, |m, v| m.max(v.abs()));
                 let err = a.iter().zip(&b).fold(0f32, |m, (x, y)| m.max((x - y).abs()));
                 assert!(scale > 0.0, "group {k}: no gradient at all");
-                assert!(err <= 1e-5 * scale, "{layout:?}, cas {cas}, group {k}: max difference {err} of {scale}");
+                assert!(
+                    err <= 1e-5 * scale,
+                    "{layout:?}, cas {cas}, color only {}, group {k}: max difference {err} of {scale}",
+                    w.color_only
+                );
             }
         }
     }

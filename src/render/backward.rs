@@ -7,7 +7,7 @@ use super::features::FeaturePipelines;
 use super::params::RenderParams;
 use super::specialized::SpecializedPipelines;
 use super::{BlendLayout, SceneBuffers};
-use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, Recorder};
+use crate::gpu::{dispatch_1d, Buffer, Gpu, MemoryKind, Recorder};
 use crate::shaders;
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
@@ -139,7 +139,9 @@ struct ViewGradients {
 
 pub struct Backward {
     gpu: Gpu,
-    blend: ComputePipeline,
+    /// blend_backward.comp by its specialization constants: the layout's four, then COLOR_ONLY.
+    blend: SpecializedPipelines,
+    layout: [u32; 4],
     project: SpecializedPipelines,
     features: FeaturePipelines,
     params: Buffer,
@@ -167,7 +169,8 @@ impl Backward {
         };
         Ok(Backward {
             gpu: gpu.clone(),
-            blend: ComputePipeline::specialized(gpu, "blend_backward", blend, &[rows, cols, 16 / cols, 16 / rows])?,
+            blend: SpecializedPipelines::new("blend_backward", blend),
+            layout: [rows, cols, 16 / cols, 16 / rows],
             project: SpecializedPipelines::new("project_backward", project),
             features: FeaturePipelines::new("blend_features_backward", features, feature_rows),
             params: Buffer::new(
@@ -288,7 +291,10 @@ impl Backward {
             for (buf, per) in [(&v.xy, 2), (&v.conic, 3), (&v.opacity, 1), (&v.color, 3), (&v.depth, 1)] {
                 rec.fill(buf, 0, frame.num_gaussians as u64 * per * 4, 0);
             }
-            rec.dispatch(&self.blend, &push, dispatch_1d(tiles));
+            // the color-only variant where nothing else has an upstream gradient
+            let color_only = params.use_alpha == 0 && params.use_depth == 0;
+            let [a, b, c, d] = self.layout;
+            rec.dispatch(self.blend.get(&self.gpu, &[a, b, c, d, color_only as u32])?, &push, dispatch_1d(tiles));
             rec.mark("blend backward");
         }
         if project {
