@@ -141,6 +141,7 @@ pub struct Backward {
     gpu: Gpu,
     /// blend_backward.comp by its specialization constants: the layout's four, then COLOR_ONLY.
     blend: SpecializedPipelines,
+    /// The layout's constants: rows and columns per invocation, the workgroup's width and height.
     layout: [u32; 4],
     project: SpecializedPipelines,
     features: FeaturePipelines,
