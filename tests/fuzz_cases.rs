@@ -226,7 +226,8 @@ fn flag_values_say_what_is_wrong() {
 fn prompt_embeddings_must_be_finite_and_of_one_length() {
     let seeds = Seeds::new();
     rejected(Family::PromptJson, br#"{"statue": [1, 2], "bench": [1]}"#, &seeds, "different or zero length");
-    rejected(Family::PromptJson, br#"{"statue": [1e300, 2], "bench": [1, 2]}"#, &seeds, "not a finite number");
+    // past f32's range: the JSON reader refuses it (exact float reading, `float_roundtrip`)
+    rejected(Family::PromptJson, br#"{"statue": [1e300, 2], "bench": [1, 2]}"#, &seeds, "number out of range");
     rejected(Family::PromptJson, br#"{"statue": [1, 2]}"#, &seeds, "no embedding for prompt \"bench\"");
 }
 
