@@ -70,7 +70,6 @@ impl DeviceInfo {
 type MessageLog = Mutex<Vec<String>>;
 
 pub(crate) struct GpuShared {
-    _entry: ash::Entry,
     pub(crate) instance: ash::Instance,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT, *mut MessageLog)>,
     pub(crate) device: ash::Device,
@@ -285,12 +284,32 @@ fn query_info(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) ->
     }
 }
 
+/// The Vulkan loader, loaded once per process and never unloaded, with one bare instance that is
+/// never destroyed. The loader unloads the drivers when a process's last instance goes, and
+/// NVIDIA's leaves thread-exit destructors in the threads that called it: on a lent H200 a test
+/// thread that ended after another thread had destroyed the last instance jumped into the
+/// unloaded driver (a segfault in `tests/gradients.rs`, whose tests each create and drop
+/// contexts, with 8 test threads). A context per `Gpu::new` stays; only the drivers stay loaded.
+fn vulkan() -> Result<&'static ash::Entry> {
+    static LOADER: std::sync::OnceLock<std::result::Result<ash::Entry, String>> = std::sync::OnceLock::new();
+    let loaded = LOADER.get_or_init(|| {
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| e.to_string())?;
+        // kept, never destroyed (ash::Instance has no Drop); where it fails, the caller's own
+        // instance fails the same way and says why
+        let _keep_drivers_loaded = create_instance(&entry, false);
+        Ok(entry)
+    });
+    loaded.as_ref().map_err(|e| {
+        anyhow!(
+            "cannot load the Vulkan loader (libvulkan.so.1): {e}; Debian/Ubuntu: apt-get install libvulkan1 mesa-vulkan-drivers"
+        )
+    })
+}
+
 /// Lists every Vulkan device with its limits (for `cogeo devices`).
 pub fn list_devices() -> Result<Vec<DeviceInfo>> {
-    let entry = unsafe { ash::Entry::load() }.context(
-        "cannot load the Vulkan loader (libvulkan.so.1); Debian/Ubuntu: apt-get install libvulkan1 mesa-vulkan-drivers",
-    )?;
-    let instance = create_instance(&entry, false)?;
+    let entry = vulkan()?;
+    let instance = create_instance(entry, false)?;
     let pds = unsafe { instance.enumerate_physical_devices()? };
     let infos = pds.iter().enumerate().map(|(i, &pd)| query_info(&instance, pd, i)).collect();
     unsafe { instance.destroy_instance(None) };
@@ -300,13 +319,11 @@ pub fn list_devices() -> Result<Vec<DeviceInfo>> {
 impl Gpu {
     /// Creates the compute context on the chosen (or best) device.
     pub fn new(choice: &DeviceChoice) -> Result<Gpu> {
-        let entry = unsafe { ash::Entry::load() }.context(
-            "cannot load the Vulkan loader (libvulkan.so.1); Debian/Ubuntu: apt-get install libvulkan1 mesa-vulkan-drivers",
-        )?;
-        let instance = create_instance(&entry, choice.validate)?;
+        let entry = vulkan()?;
+        let instance = create_instance(entry, choice.validate)?;
         let debug = if choice.validate {
             let log: *mut MessageLog = Box::into_raw(Box::new(Mutex::new(Vec::new())));
-            let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let loader = ash::ext::debug_utils::Instance::new(entry, &instance);
             let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
                     vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
@@ -422,7 +439,6 @@ impl Gpu {
         };
         Ok(Gpu {
             shared: Arc::new(GpuShared {
-                _entry: entry,
                 instance,
                 debug,
                 device,
