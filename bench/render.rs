@@ -45,10 +45,11 @@ fn main() {
             if let Some(dir) = &write_dir {
                 write_camera(&cam, settings.near, &dir.join(format!("camera-{w}x{h}.json")));
             }
-            // Warm-up: allocations and pipeline caches, and at least a second of frames so that a
-            // GPU has left its idle clock (an H100 read 345 MHz idle). On the H100 it changed
-            // nothing measurable: this path's passes stay 2-5x their times inside a training
-            // iteration, an open question (bench/RESULTS.md, NVIDIA section).
+            // Warm-up: allocations and pipeline caches, and a second of frames. On a GPU this path
+            // stays at its idle clock even so: a frame's readback of 8 planes keeps the GPU busy
+            // only ~25 % of the time, and a lent H200's SM clock read 345 MHz during these frames
+            // (1980 MHz under training), which is why its passes time 2-5x the same passes
+            // inside a training iteration (bench/RESULTS.md, NVIDIA sections).
             let warm = Instant::now();
             while warm.elapsed().as_secs_f64() < 1.0 {
                 raster.render(&buffers, &cam, &settings).unwrap();

@@ -60,7 +60,14 @@ fn main() {
             if full_sh { Some(cogeo::scene::MAX_SH_DEGREE) } else { is_trained.then(|| scene.learnt_sh_degree()) };
         let sh_degree = trainer.active_sh_degree();
         trainer.fused_step = !apart;
-        trainer.iterate(&data, false).unwrap(); // warm-up
+        // Warm-up: one iteration, and at least a second of them, so that a GPU has left its idle
+        // clock before the timed ones (a lent H200's SM clock read 345-465 MHz during the first
+        // 1M iteration after one warm-up iteration, 1980 MHz once busy for ~0.3 s)
+        let warm = Instant::now();
+        trainer.iterate(&data, false).unwrap();
+        while warm.elapsed().as_secs_f64() < 1.0 {
+            trainer.iterate(&data, false).unwrap();
+        }
         let mut stats = common::PassStats::default();
         let mut wall = Vec::new();
         let trips_before = gpu.round_trips();

@@ -24,6 +24,7 @@ cargo build --release
 rm -rf .gpu && mkdir -p .gpu/pack/t/tests .gpu/pack/t/bench
 cp "$target/release/cogeo" .gpu/pack/t/
 cargo test --release --no-run --message-format=json 2>/dev/null | executables | while read -r kind name exe; do
+    [ "$exe" = "$target/release/cogeo" ] && continue # the binary itself, copied above: no test harness
     cp "$exe" ".gpu/pack/t/tests/$name-$(basename "$exe" | sed 's/.*-//')"
 done
 cargo bench --no-run --message-format=json 2>/dev/null | executables | while read -r kind name exe; do
