@@ -198,7 +198,7 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfe
         let mut done = completer.complete_views(&[inputs], true, &mut |_, _| {}).unwrap();
         assert!(done[0].texture_pending, "the exemplar's texture waits for the transfer");
         let opaque = vec![1.0f32; w * h];
-        let own = SourceView {
+        let own = || SourceView {
             camera: &cam,
             photo: &rgb,
             hole: &hole,
@@ -207,8 +207,26 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfe
             photo_colors: ColorAffine::IDENTITY,
         };
         let cameras = std::slice::from_ref(&cam);
-        completer.transfer_colors(cameras, &[own], &[&hole], &mut done, &mut |_, _| {}).unwrap();
+        completer.transfer_colors(cameras, &[own()], &[&hole], &mut done, &mut |_, _| {}).unwrap();
         assert!(!done[0].texture_pending, "the transfer synthesized the texture");
+        // the transfer's fills of views on several threads at once (`views_in_parallel`, off on
+        // a CPU device) are those made one after another: the view, and a copy whose render is
+        // darker, so that a fill landing in the other view shows
+        let darker: Vec<f32> = rendered.iter().map(|v| 0.7 * v).collect();
+        let two_views = |parallel: bool| {
+            let completer = Completer { views_in_parallel: parallel, ..default_completer(&gpu, &cam) };
+            let both = [
+                view_inputs(&cam, &rendered, &alpha, &render_depth, &hole),
+                view_inputs(&cam, &darker, &alpha, &render_depth, &hole),
+            ];
+            let mut two = completer.complete_views(&both, true, &mut |_, _| {}).unwrap();
+            let cameras = [cam.clone(), cam.clone()];
+            completer.transfer_colors(&cameras, &[own(), own()], &[&hole, &hole], &mut two, &mut |_, _| {}).unwrap();
+            two.into_iter().map(|c| c.rgb).collect::<Vec<_>>()
+        };
+        let (apart, together) = (two_views(false), two_views(true));
+        assert!(apart[0] != apart[1], "the two views' fills should differ");
+        assert!(apart == together, "views filled in parallel differ from views filled one after another");
         done.remove(0)
     } else {
         completer.complete(&inputs, 0).unwrap()

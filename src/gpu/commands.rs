@@ -26,6 +26,9 @@ const MAX_TIMESTAMPS: u32 = 256;
 
 pub struct Recorder {
     gpu: Gpu,
+    /// The recorder's own command pool: recording into buffers of one pool must be externally
+    /// synchronized, so that threads record at once (the transfer's views) each in its own.
+    pool: vk::CommandPool,
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
     query_pool: Option<vk::QueryPool>,
@@ -43,23 +46,40 @@ impl Recorder {
     pub fn with_timestamps(gpu: &Gpu, timestamps: bool) -> Result<Recorder> {
         let s = &gpu.shared;
         let device = &s.device;
-        let cmd = unsafe {
-            let _guard = s.submit_lock.lock().unwrap(); // the command pool is externally synchronized
+        let pool = unsafe {
+            device.create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(s.queue_family)
+                    .flags(vk::CommandPoolCreateFlags::TRANSIENT),
+                None,
+            )?
+        };
+        // from here on, Drop releases whatever was made if a later step fails
+        let mut r = Recorder {
+            gpu: gpu.clone(),
+            pool,
+            cmd: vk::CommandBuffer::null(),
+            fence: vk::Fence::null(),
+            query_pool: None,
+            labels: Vec::new(),
+            pending_barrier: false,
+        };
+        r.cmd = unsafe {
             device.allocate_command_buffers(
                 &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(s.command_pool)
+                    .command_pool(pool)
                     .level(vk::CommandBufferLevel::PRIMARY)
                     .command_buffer_count(1),
             )?[0]
         };
-        let fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None)? };
+        r.fence = unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None)? };
         unsafe {
             device.begin_command_buffer(
-                cmd,
+                r.cmd,
                 &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
             )?
         };
-        let query_pool = if timestamps && s.info.timestamps {
+        if timestamps && s.info.timestamps {
             let pool = unsafe {
                 device.create_query_pool(
                     &vk::QueryPoolCreateInfo::default()
@@ -68,15 +88,13 @@ impl Recorder {
                     None,
                 )?
             };
+            r.query_pool = Some(pool);
             unsafe {
-                device.cmd_reset_query_pool(cmd, pool, 0, MAX_TIMESTAMPS);
-                device.cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, pool, 0);
+                device.cmd_reset_query_pool(r.cmd, pool, 0, MAX_TIMESTAMPS);
+                device.cmd_write_timestamp(r.cmd, vk::PipelineStageFlags::TOP_OF_PIPE, pool, 0);
             }
-            Some(pool)
-        } else {
-            None
-        };
-        Ok(Recorder { gpu: gpu.clone(), cmd, fence, query_pool, labels: Vec::new(), pending_barrier: false })
+        }
+        Ok(r)
     }
 
     fn device(&self) -> &ash::Device {
@@ -210,13 +228,14 @@ impl Drop for Recorder {
         unsafe {
             // If the work was submitted it has completed (submit_and_wait waits); if it failed to submit,
             // make sure nothing is still pending before freeing.
-            let _ = s.device.wait_for_fences(&[self.fence], true, 0);
+            if self.fence != vk::Fence::null() {
+                let _ = s.device.wait_for_fences(&[self.fence], true, 0);
+                s.device.destroy_fence(self.fence, None);
+            }
             if let Some(pool) = self.query_pool {
                 s.device.destroy_query_pool(pool, None);
             }
-            s.device.destroy_fence(self.fence, None);
-            let _guard = s.submit_lock.lock().unwrap();
-            s.device.free_command_buffers(s.command_pool, &[self.cmd]);
+            s.device.destroy_command_pool(self.pool, None); // frees its command buffer
         }
     }
 }

@@ -74,7 +74,8 @@ pub(crate) struct GpuShared {
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT, *mut MessageLog)>,
     pub(crate) device: ash::Device,
     pub(crate) queue: vk::Queue,
-    pub(crate) command_pool: vk::CommandPool,
+    /// The queue's family: each `Recorder` makes its own command pool of it.
+    pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) info: DeviceInfo,
     /// Serializes queue submission (Vulkan requires external synchronization of the queue).
@@ -111,8 +112,9 @@ impl std::ops::Sub for RoundTrips {
     }
 }
 
-// SAFETY: the raw message-log pointer is owned by GpuShared and only read under its Mutex; every
-// Vulkan handle here is externally synchronized (queue and pool behind `submit_lock`).
+// SAFETY: the raw message-log pointer is owned by GpuShared and only read under its Mutex; the
+// queue, the one Vulkan handle here that needs external synchronization, is behind `submit_lock`
+// (command pools are each Recorder's own).
 unsafe impl Send for GpuShared {}
 unsafe impl Sync for GpuShared {}
 
@@ -415,14 +417,6 @@ impl Gpu {
         let device = unsafe { instance.create_device(physical_device, &device_info, None) }
             .with_context(|| format!("vkCreateDevice failed on {}", info.name))?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        let command_pool = unsafe {
-            device.create_command_pool(
-                &vk::CommandPoolCreateInfo::default()
-                    .queue_family_index(queue_family)
-                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
-                None,
-            )?
-        };
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -443,7 +437,7 @@ impl Gpu {
                 debug,
                 device,
                 queue,
-                command_pool,
+                queue_family,
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
                 info,
                 submit_lock: Mutex::new(()),
@@ -495,7 +489,6 @@ impl Drop for GpuShared {
         unsafe {
             let _ = self.device.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);
-            self.device.destroy_command_pool(self.command_pool, None);
             self.device.destroy_device(None);
             if let Some((loader, messenger, log)) = self.debug.take() {
                 loader.destroy_debug_utils_messenger(messenger, None);

@@ -150,6 +150,12 @@ pub struct Completer {
     /// Views take the colors earlier views invented for the same surface point (`transfer_colors`;
     /// `false`, the default: each view invents its own).
     pub share_inventions: bool,
+    /// The transfer's texture fills (`texture_view`) of independent views (no shared
+    /// inventions, a built-in inpainter) run on all cores. On a GPU its host work then overlaps
+    /// (on a lent H200 this half of the stage, one view after another, was half of a removal's
+    /// time); on a CPU device the dispatches already take every core, and the speed scene's stage
+    /// went 10.8 -> 11.8 s in two pairs on 2 cores, so `load` sets it off there. Same result.
+    pub views_in_parallel: bool,
     pub seed: u64,
 }
 
@@ -226,6 +232,7 @@ impl Completer {
             depth_guidance: cfg.depth_guidance,
             photo_depth: cfg.photo_depth,
             share_inventions: cfg.share_inventions,
+            views_in_parallel: !gpu.info().is_cpu(),
             seed,
         })
     }
@@ -238,8 +245,9 @@ impl Completer {
     /// Views are independent. Where completing one is host work only (the built-in depth
     /// prior, no learned refiner, no inpainting before the surfaces are known, and no exemplar
     /// pass: the harmonic inpainter, or the exemplar leaving its texture to the transfer) they run
-    /// on all cores; otherwise one after another, since the GPU and the models take one call at
-    /// a time. Either way view i's result depends only on view i.
+    /// on all cores; otherwise one after another (the models take one call at a time; the
+    /// transfer's `views_in_parallel` runs GPU fills at once). Either way view i's result
+    /// depends only on view i.
     pub fn complete_views(
         &self,
         views: &[ViewInputs],
@@ -325,47 +333,76 @@ impl Completer {
             let left = |i: usize| completed[i].fill.iter().zip(&found[i].found).filter(|(&f, &t)| f && !t).count();
             order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
         }
-        let mut inventions: Vec<Invention> = Vec::new();
-        for (done, i) in order.into_iter().enumerate() {
-            progress(n + done + 1, 2 * n);
-            let (w, h) = (cameras[i].width as usize, cameras[i].height as usize);
-            let t = &found[i];
-            let c = &mut completed[i];
-            let mut known = t.found.clone();
-            let mut image = c.rgb.clone();
-            let invented: Vec<bool> = (0..w * h).map(|p| c.fill[p] && !t.found[p]).collect();
-            let shared = self
-                .share_inventions
-                .then(|| borrow_inventions(&cameras[i], &c.depth, &invented, &inventions, TRANSFER_TOLERANCE));
-            for u in [Some(t), shared.as_ref()].into_iter().flatten() {
-                for p in (0..w * h).filter(|&p| u.found[p]) {
-                    known[p] = true;
-                    for ch in 0..3 {
-                        image[ch * w * h + p] = u.rgb[ch * w * h + p];
-                    }
+        let independent =
+            !self.share_inventions && matches!(self.inpainter, Inpainter::Harmonic | Inpainter::Exemplar(_));
+        if independent && self.views_in_parallel {
+            // each view fills from its own image and found colors alone (`views_in_parallel`)
+            let mut views: Vec<(&mut Completed, Option<Result<()>>)> =
+                completed.iter_mut().map(|c| (c, None)).collect();
+            for_each_item(&mut views, &mut |d, _| progress(n + d, 2 * n), |i, (c, done)| {
+                *done = Some(self.texture_view(i, &cameras[i], &found[i], None, holes[i], c).map(|_| ()));
+            });
+            for (_, done) in views {
+                done.expect("every view ran")?;
+            }
+        } else {
+            let mut inventions: Vec<Invention> = Vec::new();
+            for (done, i) in order.into_iter().enumerate() {
+                progress(n + done + 1, 2 * n);
+                let shared = self.share_inventions.then_some(&inventions[..]);
+                let invented = self.texture_view(i, &cameras[i], &found[i], shared, holes[i], &mut completed[i])?;
+                if self.share_inventions {
+                    let c = &completed[i];
+                    inventions.push(Invention {
+                        camera: &cameras[i],
+                        rgb: c.rgb.clone(),
+                        depth: c.depth.clone(),
+                        invented,
+                    });
                 }
-            }
-            if known.iter().any(|&k| k) || c.texture_pending {
-                let rest: Vec<bool> = (0..w * h).map(|p| c.fill[p] && !known[p]).collect();
-                // captured and shared colors are sources now; the rest of the hole's render still is not
-                let found_or_fill: Vec<bool> = (0..w * h).map(|p| c.fill[p] || known[p]).collect();
-                let avoid = leftover(holes[i], &found_or_fill);
-                let k = Intrinsics::from(&cameras[i]);
-                let disparity = depth::disparity(&c.depth);
-                let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
-                c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
-                c.texture_pending = false;
-            }
-            if self.share_inventions {
-                inventions.push(Invention {
-                    camera: &cameras[i],
-                    rgb: c.rgb.clone(),
-                    depth: c.depth.clone(),
-                    invented,
-                });
             }
         }
         Ok(found.into_iter().map(|t| t.found).collect())
+    }
+
+    /// The second half of stage 3c for view `i`: its fill takes the colors `t` found in the photos
+    /// and, with `inventions` (`share_inventions`), those earlier views invented for the same
+    /// surface points; the rest of the fill is inpainted again from them. Returns the pixels the
+    /// view itself invents.
+    fn texture_view(
+        &self,
+        i: usize,
+        camera: &Camera,
+        t: &Transfer,
+        inventions: Option<&[Invention]>,
+        hole: &[bool],
+        c: &mut Completed,
+    ) -> Result<Vec<bool>> {
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        let mut known = t.found.clone();
+        let mut image = c.rgb.clone();
+        let invented: Vec<bool> = (0..w * h).map(|p| c.fill[p] && !t.found[p]).collect();
+        let shared = inventions.map(|inv| borrow_inventions(camera, &c.depth, &invented, inv, TRANSFER_TOLERANCE));
+        for u in [Some(t), shared.as_ref()].into_iter().flatten() {
+            for p in (0..w * h).filter(|&p| u.found[p]) {
+                known[p] = true;
+                for ch in 0..3 {
+                    image[ch * w * h + p] = u.rgb[ch * w * h + p];
+                }
+            }
+        }
+        if known.iter().any(|&k| k) || c.texture_pending {
+            let rest: Vec<bool> = (0..w * h).map(|p| c.fill[p] && !known[p]).collect();
+            // captured and shared colors are sources now; the rest of the hole's render still is not
+            let found_or_fill: Vec<bool> = (0..w * h).map(|p| c.fill[p] || known[p]).collect();
+            let avoid = leftover(hole, &found_or_fill);
+            let k = Intrinsics::from(camera);
+            let disparity = depth::disparity(&c.depth);
+            let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
+            c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
+            c.texture_pending = false;
+        }
+        Ok(invented)
     }
 
     /// Completes one view, its texture included.
