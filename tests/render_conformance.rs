@@ -5,7 +5,7 @@
 mod common;
 
 use cogeo::render::reference::{render_reference, ReferenceImage};
-use cogeo::render::{BlendLayout, Rasterizer, RenderOutput, RenderSettings, SceneBuffers};
+use cogeo::render::{BlendLayout, Rasterizer, RenderOutput, RenderSettings, SceneBuffers, SceneRenderer};
 use cogeo::scene::{Camera, GaussianScene};
 use common::{gpu, random_features, random_scene, test_camera, SceneMix};
 
@@ -202,4 +202,30 @@ fn every_blend_layout_renders_the_same_bits() {
             assert_eq!(out.features, reference.features, "scene {k}, {rows} rows: features");
         }
     }
+}
+
+#[test]
+fn a_scene_renders_the_bands_it_learnt_with_the_same_bits() {
+    // SceneRenderer renders at most `learnt_sh_degree`: a degree-3 scene whose bands above the
+    // first are zero (a training under 2000 iterations) must give the same bits as the full
+    // degree-3 evaluation, which the tests above check against the f64 reference
+    let g = gpu();
+    let mut scene = random_scene(91, 3, SceneMix::default());
+    let k = scene.sh_coeffs();
+    for g3 in scene.sh.chunks_exact_mut(3 * k) {
+        g3[3 * 4..].iter_mut().for_each(|c| *c = 0.0); // bands 2 and 3
+    }
+    assert_eq!(scene.learnt_sh_degree(), 1);
+    let cam = test_camera(83, 37);
+    let settings = RenderSettings { background: [0.2, 0.3, 0.4], ..Default::default() };
+    let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
+    let full = Rasterizer::new(&g).unwrap().render(&buffers, &cam, &settings).unwrap();
+    let learnt = SceneRenderer::new(&g, &scene, None).unwrap().render(&cam, &settings).unwrap();
+    assert!(full.alpha.iter().any(|&a| a > 0.5), "the scene renders nothing");
+    assert_eq!(learnt.rgb, full.rgb);
+    assert_eq!(learnt.alpha, full.alpha);
+    assert_eq!(learnt.expected_depth, full.expected_depth);
+    // and a band that is not zero is rendered: degree 1 differs from the DC band alone
+    let dc = RenderSettings { sh_degree: Some(0), ..settings.clone() };
+    assert_ne!(Rasterizer::new(&g).unwrap().render(&buffers, &cam, &dc).unwrap().rgb, full.rgb);
 }

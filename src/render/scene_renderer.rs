@@ -10,16 +10,28 @@ use anyhow::Result;
 pub struct SceneRenderer {
     raster: Rasterizer,
     buffers: SceneBuffers,
+    /// The scene's highest SH band with a nonzero coefficient (`learnt_sh_degree`).
+    learnt_sh_degree: u32,
 }
 
 impl SceneRenderer {
     /// Uploads `scene`, with `features` (n x dim, row-major) when given.
     pub fn new(gpu: &Gpu, scene: &GaussianScene, features: Option<(&[f32], usize)>) -> Result<SceneRenderer> {
-        Ok(SceneRenderer { buffers: SceneBuffers::upload(gpu, scene, features)?, raster: Rasterizer::new(gpu)? })
+        Ok(SceneRenderer {
+            buffers: SceneBuffers::upload(gpu, scene, features)?,
+            raster: Rasterizer::new(gpu)?,
+            learnt_sh_degree: scene.learnt_sh_degree(),
+        })
     }
 
+    /// Renders at most the bands the scene learnt: the higher ones are exactly zero and add
+    /// exactly nothing, but a PLY stores degree 3 after a training that reached only the DC band
+    /// (under 1000 iterations, as the removal speed scene's 800), and projecting 48 coefficients
+    /// per Gaussian instead of 3 is work for nothing.
     pub fn render(&mut self, camera: &Camera, settings: &RenderSettings) -> Result<RenderOutput> {
-        self.raster.render(&self.buffers, camera, settings)
+        let degree = settings.sh_degree.map_or(self.learnt_sh_degree, |d| d.min(self.learnt_sh_degree));
+        let settings = RenderSettings { sh_degree: Some(degree), ..settings.clone() };
+        self.raster.render(&self.buffers, camera, &settings)
     }
 }
 
