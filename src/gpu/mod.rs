@@ -287,11 +287,11 @@ fn query_info(instance: &ash::Instance, pd: vk::PhysicalDevice, index: usize) ->
 }
 
 /// The Vulkan loader, loaded once per process and never unloaded, with one bare instance that is
-/// never destroyed. The loader unloads the drivers when a process's last instance goes, and
-/// NVIDIA's leaves thread-exit destructors in the threads that called it: on a lent H200 a test
-/// thread that ended after another thread had destroyed the last instance jumped into the
-/// unloaded driver (a segfault in `tests/gradients.rs`, whose tests each create and drop
-/// contexts, with 8 test threads). A context per `Gpu::new` stays; only the drivers stay loaded.
+/// never destroyed, so that the drivers stay loaded too (the loader unloads them with a process's
+/// last instance). On a lent H200, `tests/gradients.rs` (contexts created and dropped on 8 test
+/// threads) segfaulted as a test thread exited, in code no longer mapped: read as that thread's
+/// exit destructors pointing into a library unloaded when another thread dropped the last
+/// context (bench/JOURNAL.md, second GPU run). A context per `Gpu::new` stays.
 fn vulkan() -> Result<&'static ash::Entry> {
     static LOADER: std::sync::OnceLock<std::result::Result<ash::Entry, String>> = std::sync::OnceLock::new();
     let loaded = LOADER.get_or_init(|| {
