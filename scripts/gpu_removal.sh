@@ -2,7 +2,7 @@
 # `cogeo remove` at real size on a lent NVIDIA machine (device tool): the removal speed bench's
 # scene (the statue at images_2, trained 800 iterations and tagged), this build against an older
 # binary, alternately, as `cargo bench --bench removal_speed -- --baseline` does on lavapipe.
-# Prepare here:  bash scripts/gpu_removal.sh --pack OLD_COGEO   (writes .rm/, about 30 MiB)
+# Prepare here:  bash scripts/gpu_removal.sh --pack OLD_COGEO   (writes .rm/, about 35 MiB)
 # Run there:     bash scripts/gpu_removal.sh   (carry .gl .rm; .gl from scripts/gpu_pack.sh)
 # Writes under $OUT: devices.txt, removal.log, and each run's report as report-NAME-R.json.
 set -u
