@@ -63,6 +63,12 @@ for t in /tmp/t/tests/*; do
     timeout 100 "$t" --test-threads 8 --skip statue_capture_rotations_are_repaired >> "$OUT/tests.log" 2>&1; echo "exit $?" >> "$OUT/tests.log"
 done
 grep -E "^== |^test result|exit [^0]|FAILED|panicked|SKIPPED" "$OUT/tests.log" | grep -v "exit 0" | head -80
+# gradients crashed at a thread's exit on an H200 (contexts dropped on 8 threads; bench/JOURNAL.md,
+# second GPU run): run it again a few times, the exit status of each
+for i in 1 2 3 4; do
+    [ "$(elapsed)" -gt 360 ] && break
+    timeout 60 /tmp/t/tests/gradients-* --test-threads 8 > /dev/null 2>&1; echo "gradients again, run $i: exit $?"
+done | tee -a "$OUT/tests.log"
 
 # gsplat on the same scenes and cameras.
 while kill -0 $build 2>/dev/null && [ "$(elapsed)" -lt 470 ]; do sleep 2; done
