@@ -326,13 +326,6 @@ impl Completer {
             *t = Some(transfer(i, &cameras[i], &completed[i].depth, holes[i], sources, TRANSFER_TOLERANCE));
         });
         let found: Vec<Transfer> = found.into_iter().map(|t| t.expect("every view ran")).collect();
-        // with shared inventions the view with the most left to invent goes first: it invents once
-        // for the views after it (without them the views are independent)
-        let mut order: Vec<usize> = (0..completed.len()).collect();
-        if self.share_inventions {
-            let left = |i: usize| completed[i].fill.iter().zip(&found[i].found).filter(|(&f, &t)| f && !t).count();
-            order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
-        }
         let independent =
             !self.share_inventions && matches!(self.inpainter, Inpainter::Harmonic | Inpainter::Exemplar(_));
         if independent && self.views_in_parallel {
@@ -346,6 +339,13 @@ impl Completer {
                 done.expect("every view ran")?;
             }
         } else {
+            // with shared inventions the view with the most left to invent goes first: it invents once
+            // for the views after it (without them the views are independent)
+            let mut order: Vec<usize> = (0..completed.len()).collect();
+            if self.share_inventions {
+                let left = |i: usize| completed[i].fill.iter().zip(&found[i].found).filter(|(&f, &t)| f && !t).count();
+                order.sort_by_key(|&i| std::cmp::Reverse(left(i)));
+            }
             let mut inventions: Vec<Invention> = Vec::new();
             for (done, i) in order.into_iter().enumerate() {
                 progress(n + done + 1, 2 * n);
