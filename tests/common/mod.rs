@@ -45,17 +45,16 @@ pub fn gpu() -> TestGpu {
     // Tests create and drop contexts on up to 8 threads; on a lent H200 a test thread that ended
     // after the others had dropped theirs crashed in its thread-exit destructors, in driver code
     // unloaded meanwhile (`cogeo::gpu` keeps the loader and an instance for the same reason).
+    let choice =
+        |validate| DeviceChoice { selector: std::env::var("COGEO_DEVICE").ok(), validate, memory_limit_mib: None };
     static ANCHOR: std::sync::Once = std::sync::Once::new();
     ANCHOR.call_once(|| {
-        let choice =
-            DeviceChoice { selector: std::env::var("COGEO_DEVICE").ok(), validate: false, memory_limit_mib: None };
-        if let Ok(anchor) = Gpu::new(&choice) {
+        if let Ok(anchor) = Gpu::new(&choice(false)) {
             std::mem::forget(anchor);
         }
     });
     let validate = std::env::var("COGEO_VALIDATE").map(|v| v != "0").unwrap_or(true);
-    let choice = DeviceChoice { selector: std::env::var("COGEO_DEVICE").ok(), validate, memory_limit_mib: None };
-    let gpu = Gpu::new(&choice).expect("cannot create the Vulkan context (is lavapipe installed?)");
+    let gpu = Gpu::new(&choice(validate)).expect("cannot create the Vulkan context (is lavapipe installed?)");
     if validate {
         assert!(gpu.validating());
     }
