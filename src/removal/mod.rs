@@ -408,7 +408,7 @@ fn refine_views(
             windows[i] = Some(win);
         }
     }
-    let total = opts.refine.iters as usize;
+    let total = opts.refine.iterations(cameras.len()) as usize;
     let (refined, report) = refine::refine(
         gpu,
         scene,
