@@ -74,7 +74,7 @@ pub const MIN_PASSES: u32 = 6;
 pub struct RefineConfig {
     /// Refinement iterations (the first half with geometry frozen), one view each. Default: 150,
     /// or 6 per view with more than 25 views (`DEFAULT_ITERS`, `MIN_PASSES`), so that each view
-    /// is refined about as often as on the scenes the default was set on
+    /// is refined about as often as on the scenes the default was set on.
     #[arg(id = "refine-iters", long = "refine-iters")]
     pub iters: Option<u32>,
     /// Share of the iterations with geometry frozen.
