@@ -197,7 +197,8 @@ pub fn rectify(
     if hole_side > MAX_GRID / 2 {
         texel *= hole_side as f64 / (MAX_GRID / 2) as f64;
     }
-    let grid = |context: f64| sample_grid(frame, image, fill, avoid, labels, label, w, h, (lo, hi), texel, context);
+    let surface = SurfacePixels { image, fill, avoid, labels, label, w, h };
+    let grid = |context: f64| sample_grid(frame, &surface, (lo, hi), texel, context);
     let wide = grid(PERIODIC_CONTEXT);
     if repeats(&wide) {
         Some(wide)
@@ -261,22 +262,27 @@ fn autocorrelation(luma: &[f64], known: &[bool], w: usize, h: usize, ox: isize, 
     (pairs >= MIN_PAIRS && saa > 0.0 && sbb > 0.0).then(|| sab / (saa * sbb).sqrt())
 }
 
-/// Resamples the surface's pixels onto a grid of `texel` in the plane: the box (lo, hi) grown by
-/// `context` of its size (at least 16 texels) on every side, at most MAX_GRID texels a side.
-#[allow(clippy::too_many_arguments)]
-fn sample_grid(
-    frame: &PlaneFrame,
-    image: &[f32],
-    fill: &[bool],
-    avoid: &[bool],
-    labels: &[u8],
+/// The arguments of `rectify` that `sample_grid` reads: the image and its per-pixel masks.
+struct SurfacePixels<'a> {
+    image: &'a [f32],
+    fill: &'a [bool],
+    avoid: &'a [bool],
+    labels: &'a [u8],
     label: u8,
     w: usize,
     h: usize,
+}
+
+/// Resamples the surface's pixels onto a grid of `texel` in the plane: the box (lo, hi) grown by
+/// `context` of its size (at least 16 texels) on every side, at most MAX_GRID texels a side.
+fn sample_grid(
+    frame: &PlaneFrame,
+    surface: &SurfacePixels,
     (lo, hi): (DVec2, DVec2),
     texel: f64,
     context: f64,
 ) -> Rectified {
+    let SurfacePixels { image, fill, avoid, labels, label, w, h } = *surface;
     let side = |extent: f64| ((extent / texel).ceil().min(1e9) as usize).saturating_add(1);
     let grid = |extent: f64| {
         let inner = side(extent);
