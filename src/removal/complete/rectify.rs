@@ -44,9 +44,10 @@ const BLURRY_FOOTPRINT: f64 = 1.5;
 /// The share of a surface's fill pixels (in plane coordinates) at each end of each axis left out
 /// of the box the grid is centred on (`trimmed_box`). The grid reaches past the box (by its own
 /// size, or LOCAL_CONTEXT of it), so they stay in it unless they lie far off the rest; then the
-/// image-space fill takes them (`Rectified::write_back`). On the synth room two-of-three fill pixels by the wall's crease
-/// stretched the floor's grids: their texels grew, their sources fell below their hole texels,
-/// and the floor was left to image-space translations (a checkerboard at the wrong period).
+/// image-space fill takes them (`Rectified::write_back`). On the synth room two-of-three fill
+/// pixels by the wall's crease stretched the floor's grids: their texels grew, their sources fell
+/// below their hole texels, and the floor was left to image-space translations (a checkerboard at
+/// the wrong period).
 /// Paired runs (journal, 2026-11-27): synth two-of-three 25.48 -> 26.14 dB masked PSNR,
 /// statue-one masked LPIPS 0.080 -> 0.047; synth one unchanged on the whole, though two of its
 /// views now fill the box's never-seen footprint with a smooth blob at every seed: their smaller
