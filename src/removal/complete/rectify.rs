@@ -213,8 +213,8 @@ pub fn rectify(
 /// (a checkerboard swings from about -0.8 at half its period to +0.8 at its period, along both
 /// axes). Grass and gravel only decay, with wiggles, and a drift of light over a lawn can make one
 /// direction climb at a long lag: of the 173 rectified grids of the statue and cup composites none
-/// climbed 0.8 in two directions; of the synth rooms' 55 floors and walls 48 did (journal,
-/// 2026-11-28).
+/// climbed 0.8 in two directions (the cup's 122 measured at every second lag); of the synth rooms'
+/// 55 floors and walls 48 did (journal, 2026-11-28).
 fn repeats(g: &Rectified) -> bool {
     let n = g.w * g.h;
     let known: Vec<bool> = (0..n).map(|t| g.labels[t] == ON_SURFACE && !g.hole[t] && !g.avoid[t]).collect();
