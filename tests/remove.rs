@@ -186,6 +186,52 @@ fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("partial") && err.contains("no inpainted view for image"), "{err}");
 
+    // with --exposure the provided views, completions of the photos, are taken into the scene's
+    // colors through each view's inverse map, and `inpainted/` is written back through the map:
+    // inside the holes the provided truth comes back as it was, outside them the render (scene
+    // colors) through the view's map. Per-view gains; the check fails if either way is skipped.
+    let names: Vec<String> = edited.iter().map(|n| n.to_string_lossy().trim_end_matches(".png").to_string()).collect();
+    let gain = |k: usize| [0.8 - 0.01 * k as f64, 0.9, 0.7 + 0.01 * k as f64];
+    let maps: Vec<serde_json::Value> = names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| {
+            let g = gain(k);
+            serde_json::json!({ "name": n, "matrix": [[g[0], 0, 0], [0, g[1], 0], [0, 0, g[2]]], "bias": [0, 0, 0] })
+        })
+        .collect();
+    let exposure = root.join("exposure.json");
+    std::fs::write(&exposure, serde_json::json!({ "views": maps }).to_string()).unwrap();
+    let exposure = exposure.to_string_lossy().into_owned();
+    remove("own_inpainting_exposure", &["--inpainted", &truth_dir, "--no-transfer", "--no-refine", "--exposure", &exposure]);
+    let (mut inside, mut outside) = (0, 0);
+    for (k, name) in names.iter().enumerate() {
+        let file = format!("{name}.png");
+        let load = |dir: std::path::PathBuf| image::open(dir.join(&file)).unwrap().to_rgb8();
+        let (mine, theirs, render) = (
+            load(root.join("own_inpainting_exposure/inpainted")),
+            load(truth.images.clone()),
+            load(root.join("own_inpainting_exposure/removed")),
+        );
+        let mask = image::open(root.join("own_inpainting_exposure/mask").join(&file)).unwrap().to_luma8();
+        for (i, m) in mask.pixels().enumerate() {
+            let (x, y) = (i as u32 % mask.width(), i as u32 / mask.width());
+            let expected: [f64; 3] = if m[0] == 255 {
+                inside += 1;
+                theirs.get_pixel(x, y).0.map(f64::from)
+            } else {
+                outside += 1;
+                let r = render.get_pixel(x, y).0;
+                std::array::from_fn(|c| (r[c] as f64 * gain(k)[c]).min(255.0))
+            };
+            let got = mine.get_pixel(x, y).0;
+            // the render's own 8-bit rounding, scaled by the gain, plus the output's
+            let off = (0..3).map(|c| (got[c] as f64 - expected[c]).abs()).fold(0.0, f64::max);
+            assert!(off <= 1.0, "{file} ({x}, {y}): {got:?} against {expected:?} (hole mask {})", m[0]);
+        }
+    }
+    assert!(inside > 0 && outside > 0);
+
     // every ONNX path through the CLI (tiny models; no refinement to keep it short)
     let models = root.join("models");
     let lama = onnx::write(&models, "lama.onnx", &onnx::tiny_lama());

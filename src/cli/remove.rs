@@ -8,6 +8,7 @@ use cogeo::io::{write_exr, write_png_rgb};
 use cogeo::removal::complete::Completer;
 use cogeo::removal::held_out::{render_held_out, score_against_synth, GroundTruthScores};
 use cogeo::removal::report::RemovalReport;
+use cogeo::scene::exposure::ColorAffine;
 use cogeo::scene::{ply, Camera};
 use std::path::{Path, PathBuf};
 
@@ -45,30 +46,21 @@ pub struct RemoveArgs {
     /// The training views' exposure maps (`exposure.json` of `cogeo train --exposure`): each
     /// photo is taken back into the scene's colors through the inverse of its own map before
     /// the removal borrows its pixels, so a brighter source view leaves no brighter patch.
+    /// `--inpainted` views, completions of those photos, are taken the same way, and `inpainted/`
+    /// is written back in each photo's colors.
     #[arg(long, value_name = "EXPOSURE_JSON")]
     pub exposure: Option<PathBuf>,
     #[command(flatten)]
     pub device: DeviceArgs,
 }
 
-/// The training views' photos in the scene's colors: through the inverse of each view's map in
-/// `exposure` (as they are without one; a view the file does not name keeps its colors, with a
-/// warning).
-fn photos_in_scene_colors(train: &[cogeo::scene::dataset::View], exposure: Option<&Path>) -> Result<Vec<Vec<f32>>> {
-    let Some(path) = exposure else { return Ok(train.iter().map(|v| v.image.clone()).collect()) };
+/// The training views' exposure maps of `--exposure`, one per view (None where the file names no
+/// map for it, with a warning: that view's colors are used as they are).
+fn view_exposures(train: &[cogeo::scene::dataset::View], path: &Path) -> Result<Vec<Option<ColorAffine>>> {
     let maps = cogeo::scene::exposure::Exposures::read(path)?;
-    let mut missing = Vec::new();
-    let photos = train
-        .iter()
-        .map(|v| match maps.get(&v.camera.name) {
-            // read() checked that every map inverts
-            Some(map) => map.inverse().unwrap().apply(&v.image),
-            None => {
-                missing.push(v.camera.name.as_str());
-                v.image.clone()
-            }
-        })
-        .collect();
+    let per_view: Vec<Option<ColorAffine>> = train.iter().map(|v| maps.get(&v.camera.name).cloned()).collect();
+    let missing: Vec<&str> =
+        train.iter().zip(&per_view).filter(|(_, m)| m.is_none()).map(|(v, _)| v.camera.name.as_str()).collect();
     if !missing.is_empty() {
         eprintln!(
             "warning: {}: no exposure map for {} view(s) ({}); their photos are used as they are",
@@ -77,7 +69,16 @@ fn photos_in_scene_colors(train: &[cogeo::scene::dataset::View], exposure: Optio
             missing.join(", ")
         );
     }
-    Ok(photos)
+    Ok(per_view)
+}
+
+/// `rgb` of view `i` out of its photo's colors into the scene's, through the inverse of the view's
+/// map (`Exposures::read` checked that every map inverts); as it is without a map.
+fn into_scene_colors(maps: &[Option<ColorAffine>], i: usize, rgb: &[f32]) -> Vec<f32> {
+    match maps.get(i).and_then(Option::as_ref) {
+        Some(map) => map.inverse().unwrap().apply(rgb),
+        None => rgb.to_vec(),
+    }
 }
 
 /// The labels named by --labels and --prompt.
@@ -139,8 +140,16 @@ fn slices(images: &[Vec<f32>]) -> Vec<&[f32]> {
 }
 
 /// The edited views' images: renders before, after and right after deletion, the hole masks and,
-/// when completion ran, the inpainted views and completed depths.
-fn write_edited_views(out: &Path, cameras: &[Camera], v: &[cogeo::removal::ViewResult], completed: bool) -> Result<()> {
+/// when completion ran, the inpainted views and completed depths. The inpainted views are written
+/// in their photos' colors (through each view's map of `exposures`, under `--exposure`), as the
+/// photos they complete, so that `--inpainted` takes a run's `inpainted/` back unchanged.
+fn write_edited_views(
+    out: &Path,
+    cameras: &[Camera],
+    v: &[cogeo::removal::ViewResult],
+    completed: bool,
+    exposures: Option<&[Option<ColorAffine>]>,
+) -> Result<()> {
     let images = |f: fn(&cogeo::removal::ViewResult) -> &[f32]| v.iter().map(f).collect::<Vec<_>>();
     write_views(&out.join("before"), cameras, &images(|x| &x.before))?;
     write_views(&out.join("after"), cameras, &images(|x| &x.after))?;
@@ -165,7 +174,15 @@ fn write_edited_views(out: &Path, cameras: &[Camera], v: &[cogeo::removal::ViewR
         cogeo::io::write_png(&out.join(format!("mask/{}.png", c.name)), c.width, c.height, image::ColorType::L8, &m)?;
     }
     if completed {
-        write_views(&out.join("inpainted"), cameras, &images(|x| &x.inpainted))?;
+        let in_photo_colors: Vec<Vec<f32>> = v
+            .iter()
+            .enumerate()
+            .map(|(i, x)| match exposures.and_then(|m| m.get(i)).and_then(Option::as_ref) {
+                Some(map) => map.apply(&x.inpainted),
+                None => x.inpainted.clone(),
+            })
+            .collect();
+        write_views(&out.join("inpainted"), cameras, &slices(&in_photo_colors))?;
         std::fs::create_dir_all(out.join("depth"))?;
         for (c, x) in cameras.iter().zip(v) {
             write_exr(&out.join(format!("depth/{}.exr", c.name)), c.width, c.height, &[("Y", &x.depth)])?;
@@ -188,7 +205,16 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     let gpu = open_gpu(&a.device)?;
     let views: Vec<(String, (u32, u32))> =
         data.train.iter().map(|v| (v.camera.name.clone(), (v.camera.width, v.camera.height))).collect();
-    let completer = Completer::load(&gpu, &f.completion, opts.seed, &views)?;
+    let mut completer = Completer::load(&gpu, &f.completion, opts.seed, &views)?;
+    // the photos and the views inpainted from them (`--inpainted`) come into the scene's colors
+    let exposures = a.exposure.as_deref().map(|p| view_exposures(&data.train, p)).transpose()?;
+    let photos: Vec<Vec<f32>> = match &exposures {
+        Some(maps) => {
+            completer.inpainter.map_provided(|i, rgb| into_scene_colors(maps, i, rgb));
+            data.train.iter().enumerate().map(|(i, v)| into_scene_colors(maps, i, &v.image)).collect()
+        }
+        None => data.train.iter().map(|v| v.image.clone()).collect(),
+    };
     let _folder = super::args::OutputFolder::create(&a.out)?;
     eprintln!(
         "removing label(s) {labels:?} from {} Gaussians; editing {} views on {}",
@@ -204,7 +230,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         &scene,
         &scene_labels,
         &cameras,
-        &photos_in_scene_colors(&data.train, a.exposure.as_deref())?,
+        &photos,
         data.extent,
         &opts,
         &completer,
@@ -218,7 +244,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
     let batch = cogeo::io::OutputBatch::begin();
     let test_cams: Vec<Camera> = data.test.iter().map(|v| v.camera.clone()).collect();
     let held_out = std::thread::scope(|s| -> Result<_> {
-        let writer = s.spawn(|| write_edited_views(out, &cameras, v, opts.stages.complete));
+        let writer = s.spawn(|| write_edited_views(out, &cameras, v, opts.stages.complete, exposures.as_deref()));
         let held_out = render_held_out(&gpu, &scene, &removal.scene, &test_cams, opts.background);
         writer.join().expect("the image writer panicked")?;
         held_out

@@ -77,6 +77,16 @@ impl Inpainter {
         Ok(Inpainter::Provided { dir: dir.to_path_buf(), views })
     }
 
+    /// Takes each provided view `i` through `map(i, rgb)`: `cogeo remove --exposure` brings them
+    /// into the scene's colors, as it does the photos they complete. Other inpainters are unchanged.
+    pub fn map_provided(&mut self, map: impl Fn(usize, &[f32]) -> Vec<f32>) {
+        if let Inpainter::Provided { views, .. } = self {
+            for (i, v) in views.iter_mut().enumerate() {
+                *v = map(i, v);
+            }
+        }
+    }
+
     /// As `inpaint`, for edited view `index` (the provided views are per view).
     pub fn inpaint_view(&self, index: usize, image: &[f32], hole: &[bool], w: usize, h: usize) -> Result<Vec<f32>> {
         if let Inpainter::Provided { views, dir } = self {

@@ -83,7 +83,8 @@ pub struct CompletionConfig {
     /// output of LaMa, Stable Diffusion, an image editor, ...), used as the RGB completion of those
     /// views exactly inside the holes; depth, color transfer, fusion and refinement run unchanged.
     /// Inpaint at least the removed objects' masks, dilated a few pixels (a previous run's `mask/`
-    /// shows the region cogeo fills). Views of another size are resized.
+    /// shows the region cogeo fills). Views of another size are resized. They are in their photos'
+    /// colors; with `--exposure` they are taken into the scene's colors as the photos are.
     #[arg(long)]
     pub inpainted: Option<PathBuf>,
     /// ONNX monocular depth model (see --depth-contract). Default: the built-in prior (harmonic
