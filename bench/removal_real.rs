@@ -219,6 +219,11 @@ pub fn run(
     let table_only = args.iter().any(|a| a == "--real-table-only");
     // --reuse-composites: keep each composite's training and tagging, and reuse them on later runs
     let reuse_composites = args.iter().any(|a| a == "--reuse-composites");
+    // --real-exposure statue,cup: those captures' composites are trained with `--exposure`, whose
+    // maps the removal is handed, and their held-out views scored with `eval --fit-exposure` (the
+    // cup's photos change exposure from view to view; a held-out view's exposure no scene knows)
+    let exposure_captures = arg("--real-exposure", "");
+    let with_exposure = |capture: &str| exposure_captures.split(',').any(|c| c == capture);
     for spec in specs.iter().filter(|_| !table_only) {
         eprintln!(
             "real scene {} ({} object(s) in {}, removing {})",
@@ -229,7 +234,9 @@ pub fn run(
         let capture_cache = prepare(spec, &downscale_of(spec.capture), &iters, &data);
         // kept inside the capture's cache: a retrained capture composites differently, and its
         // new cache folder starts without them
-        let reuse = reuse_composites.then(|| capture_cache.join("composites").join(spec.name));
+        let exposure = with_exposure(spec.capture);
+        let kept_as = if exposure { format!("{}-exposure", spec.name) } else { spec.name.to_string() };
+        let reuse = reuse_composites.then(|| capture_cache.join("composites").join(kept_as));
         let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
         let truth = cogeo::synth::ground_truth(&data, &labels);
         assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);
@@ -241,8 +248,8 @@ pub fn run(
             iters: &iters,
             lpips,
             fid,
-            exposure: false,
-            fit_exposure: false,
+            exposure,
+            fit_exposure: exposure,
             reuse,
         };
         rows.extend(run.variants(&dir, spec.seed, variants));
@@ -309,7 +316,8 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &st
         "Removal on real photos with exact ground truth: virtual objects composited into the shared captures \
          (`cogeo synth --composite-into`, standing where `bench/real_placements/` says; statue `images_2`, cup \
          `images`, further downscaled by the row's `--real-downscale` (a factor that is not whole: the photos resampled); the row's number of training iterations of \
-         the capture without and with the objects), \
+         the capture without and with the objects; \"exposure\": the composite trained with `--exposure`, its maps handed to \
+         the removal and the held-out views scored with `eval --fit-exposure`, as `--real-exposure` asks), \
          `cargo bench --bench removal -- --scenes real`, on {device}. Held-out views against the original photos: inside the removed objects' \
          silhouettes (mask), its parts that some training view saw (seen elsewhere) or none did (never seen), \
          outside the silhouettes (outside), and the silhouettes' bounding box (bbox).\n\n\
@@ -319,10 +327,11 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], variants: &[(&str, &st
     for r in rows {
         let m = &r["metrics"];
         md += &format!(
-            "| {} | {}, {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {}, {}{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r["scene"].as_str().unwrap(),
             r["downscale"].as_str().unwrap_or("?"),
             r["iters"].as_str().unwrap_or("?"),
+            if r["exposure"] == true { ", exposure" } else { "" },
             r["variant"].as_str().unwrap(),
             num(&m["mask"]["psnr"], 2),
             num(&m["lpips"]["mask"], 3),
