@@ -9,7 +9,7 @@
 //!                                  --retrain 2 --lpips-model lpips.onnx --fid-model inception.onnx
 //!                                  --exposure-jitter 0.2 --variants "cogeo (full),removal only"
 //!                                  --real-downscale 1 --real-iters 800 --reuse-composites
-//!                                  --no-results]
+//!                                  --real-exposure cup --no-results]
 //!
 //! `--scenes` names scenes, or the groups `synth` (the default: the three rooms), `real`
 //! (statue-one, statue-two-of-three, cup-one, cup-two-of-three; hours on 2 CPU cores at full
@@ -22,7 +22,9 @@
 //! markers; a rerun of some real scenes keeps the others' rows, and `--real-table-only` rebuilds
 //! the table and sheet from the stored rows without running anything. `--reuse-composites` keeps
 //! each real scene's trained and tagged composite and reuses it on later runs (removal_real.rs),
-//! so that runs of two commits compare on the same training. `--variants` keeps the
+//! so that runs of two commits compare on the same training. `--real-exposure cup` trains that
+//! capture's composites with `--exposure` and scores them with `eval --fit-exposure` (its rows
+//! say so). `--variants` keeps the
 //! variants whose names start with one of the given prefixes.
 //! `--supersample N` makes the scenes with
 //! N x N rays per pixel (anti-aliased; files get an `-aaN` suffix). `--repeat-full` runs the full
