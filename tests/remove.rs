@@ -203,7 +203,10 @@ fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
     let exposure = root.join("exposure.json");
     std::fs::write(&exposure, serde_json::json!({ "views": maps }).to_string()).unwrap();
     let exposure = exposure.to_string_lossy().into_owned();
-    remove("own_inpainting_exposure", &["--inpainted", &truth_dir, "--no-transfer", "--no-refine", "--exposure", &exposure]);
+    remove(
+        "own_inpainting_exposure",
+        &["--inpainted", &truth_dir, "--no-transfer", "--no-refine", "--exposure", &exposure],
+    );
     let (mut inside, mut outside) = (0, 0);
     for (k, name) in names.iter().enumerate() {
         let file = format!("{name}.png");
