@@ -81,6 +81,15 @@ fn into_scene_colors(maps: &[Option<ColorAffine>], i: usize, rgb: &[f32]) -> Vec
     }
 }
 
+/// `rgb` of view `i` out of the scene's colors into its photo's, through the view's map; as it
+/// is without a map (`into_scene_colors` undone).
+fn into_photo_colors(maps: &[Option<ColorAffine>], i: usize, rgb: &[f32]) -> Vec<f32> {
+    match maps.get(i).and_then(Option::as_ref) {
+        Some(map) => map.apply(rgb),
+        None => rgb.to_vec(),
+    }
+}
+
 /// The labels named by --labels and --prompt.
 pub fn chosen_labels(flags: &RemovalFlags, scene_path: &Path) -> Result<Vec<u8>> {
     let mut labels = flags.labels.clone();
@@ -174,15 +183,14 @@ fn write_edited_views(
         cogeo::io::write_png(&out.join(format!("mask/{}.png", c.name)), c.width, c.height, image::ColorType::L8, &m)?;
     }
     if completed {
-        let in_photo_colors: Vec<Vec<f32>> = v
-            .iter()
-            .enumerate()
-            .map(|(i, x)| match exposures.and_then(|m| m.get(i)).and_then(Option::as_ref) {
-                Some(map) => map.apply(&x.inpainted),
-                None => x.inpainted.clone(),
-            })
-            .collect();
-        write_views(&out.join("inpainted"), cameras, &slices(&in_photo_colors))?;
+        match exposures {
+            Some(maps) => {
+                let recolored: Vec<Vec<f32>> =
+                    v.iter().enumerate().map(|(i, x)| into_photo_colors(maps, i, &x.inpainted)).collect();
+                write_views(&out.join("inpainted"), cameras, &slices(&recolored))?;
+            }
+            None => write_views(&out.join("inpainted"), cameras, &images(|x| &x.inpainted))?,
+        }
         std::fs::create_dir_all(out.join("depth"))?;
         for (c, x) in cameras.iter().zip(v) {
             write_exr(&out.join(format!("depth/{}.exr", c.name)), c.width, c.height, &[("Y", &x.depth)])?;
