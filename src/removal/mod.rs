@@ -191,11 +191,11 @@ pub fn remove(
         // saw the completed surface
         if !photos.is_empty() {
             if completer.photo_depth {
-                correct_depths(&mut views, cameras, completer, progress);
+                correct_depths(&mut views, cameras, completer, opts.keep_alpha, progress);
                 clock.lap("photo_depth");
             }
             if opts.stages.transfer {
-                transfer_colors(&mut views, cameras, completer, progress)?;
+                transfer_colors(&mut views, cameras, completer, opts.keep_alpha, progress)?;
                 clock.lap("transfer");
             }
         }
@@ -294,23 +294,43 @@ fn sources_and_holes<'v>(views: &'v [EditedView]) -> (Vec<SourceView<'v>>, Vec<&
 }
 
 /// Stage 3b over every view (`cameras`, the views' own; needs the photos).
-fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Completer, progress: Progress) {
+fn correct_depths(
+    views: &mut [EditedView],
+    cameras: &[Camera],
+    completer: &Completer,
+    keep_alpha: f32,
+    progress: Progress,
+) {
+    // the depth of the Gaussians left behind the objects, where they cover the pixel
+    let leftovers: Vec<Vec<f32>> = views
+        .iter()
+        .map(|v| {
+            let a = &v.masked.after_removal;
+            a.depth.iter().zip(&a.alpha).map(|(&d, &alpha)| if alpha >= keep_alpha { d } else { 0.0 }).collect()
+        })
+        .collect();
     let mut completed = take_completions(views);
     let (sources, holes) = sources_and_holes(views);
+    let taken = completer.prefer_leftover_depths(cameras, &sources, &leftovers, &mut completed, &mut |d, t| {
+        progress("leftover depth", d, t)
+    });
     let scales =
         completer.correct_depths(cameras, &sources, &holes, &mut completed, &mut |d, t| progress("photo depth", d, t));
     drop((sources, holes));
     put_back(views, completed);
-    for (v, scale) in views.iter_mut().zip(scales) {
+    for ((v, scale), taken) in views.iter_mut().zip(scales).zip(taken) {
         v.report.hole_depth_scale = Some(scale);
+        v.report.leftover_depth_pixels = Some(taken);
     }
 }
 
-/// Stage 3c over every view (`cameras`, the views' own; needs the photos).
+/// Stage 3c over every view (`cameras`, the views' own; needs the photos), then the leftovers'
+/// colors where no photo lent one (`EditedView::take_leftover_colors`).
 fn transfer_colors(
     views: &mut [EditedView],
     cameras: &[Camera],
     completer: &Completer,
+    keep_alpha: f32,
     progress: Progress,
 ) -> Result<()> {
     let mut completed = take_completions(views);
@@ -322,6 +342,10 @@ fn transfer_colors(
     for (v, t) in views.iter_mut().zip(transferred) {
         v.report.transferred_pixels = Some(t.iter().filter(|&&f| f).count());
         v.transferred = Some(t);
+    }
+    // what no photo lent, where the Gaussians left behind cover it, takes their render
+    for v in views.iter_mut() {
+        v.report.leftover_color_pixels = Some(v.take_leftover_colors(keep_alpha));
     }
     Ok(())
 }

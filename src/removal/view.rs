@@ -21,7 +21,8 @@ pub struct EditedView<'a> {
     pub masked: MaskedView,
     /// Stage 3: the inpainted image and completed depth (None: removal only).
     pub completed: Option<Completed>,
-    /// Stage 3c: the hole pixels that took a photo's color (None: no transfer ran).
+    /// Stage 3c: the hole pixels that took a photo's color, or the leftovers' render where no
+    /// photo lent one (`take_leftover_colors`); None: no transfer ran.
     pub transferred: Option<Vec<bool>>,
     /// The photo's colors as an affine map of the original render's (identity without a photo).
     pub photo_colors: ColorAffine,
@@ -47,6 +48,14 @@ pub struct ViewReport {
     pub farther_covered_pixels: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hole_depth_scale: Option<DepthScale>,
+    /// Fill pixels no photo lent a color that took the render of the Gaussians left behind the
+    /// objects (`EditedView::take_leftover_colors`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub leftover_color_pixels: Option<usize>,
+    /// Fill pixels that took the depth of the Gaussians left behind the objects
+    /// (`complete::leftover_depth`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub leftover_depth_pixels: Option<usize>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub transferred_pixels: Option<usize>,
     /// Fill pixels left to the Gaussians behind the removed objects (`MaskedView::patch_pixels`).
@@ -114,6 +123,35 @@ impl<'a> EditedView<'a> {
             alpha: &m.before.alpha,
             photo_colors: self.photo_colors,
         })
+    }
+
+    /// After the color transfer: the fill pixels no photo lent a color, where the Gaussians left
+    /// behind the objects cover them (alpha at least `keep_alpha`), take those Gaussians' render
+    /// (in the photo's colors, as the transferred ones are) instead of the inpainter's invention,
+    /// and count as not invented. The leftovers were trained by every view that saw around the
+    /// object, so they are one invention for all views, where each view's inpainter makes its
+    /// own: on the cup composite the exemplar filled the desk under the box with a dark blob that
+    /// no two views agreed on (held-out masked PSNR 25.22 -> 25.81 dB, LPIPS 0.183 -> 0.187;
+    /// the synth rooms -0.06 to +0.01 dB). Returns the pixels taken.
+    pub fn take_leftover_colors(&mut self, keep_alpha: f32) -> usize {
+        let (Some(completed), Some(transferred)) = (self.completed.as_mut(), self.transferred.as_mut()) else {
+            return 0;
+        };
+        let leftovers = &self.masked.after_removal;
+        let n = leftovers.alpha.len();
+        let in_photo_colors = self.photo_colors.apply(&leftovers.rgb);
+        let mut taken = 0;
+        for p in 0..n {
+            if !self.masked.fill[p] || transferred[p] || leftovers.alpha[p] < keep_alpha {
+                continue;
+            }
+            for c in 0..3 {
+                completed.rgb[c * n + p] = in_photo_colors[c * n + p].clamp(0.0, 1.0);
+            }
+            transferred[p] = true;
+            taken += 1;
+        }
+        taken
     }
 
     /// The fill pixels no photo's color reached: what the inpainter invented.

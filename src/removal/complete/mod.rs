@@ -15,6 +15,8 @@
 //!   surface's colors on it.
 //! - `rectify`: a plane's pixels on a regular grid in the plane, where the exemplar copies
 //!   texture with its period under perspective.
+//! - `leftover_depth`: the depth of the Gaussians left behind the objects, where the photos
+//!   agree on it better than on the completed one.
 //! - `photo_depth`: the hole depth's scale that makes the other views agree on its colors.
 //! - `transfer`: colors of the completed surface from the other views that saw it.
 //! - `source_views`: the edited views as the other views see them, for both of those.
@@ -24,6 +26,7 @@ pub mod diffusion;
 pub mod exemplar;
 pub mod harmonic;
 pub mod inpaint;
+pub mod leftover_depth;
 pub mod photo_depth;
 pub mod rectify;
 pub mod source_views;
@@ -39,6 +42,7 @@ use anyhow::Result;
 use depth::{DepthContract, DepthPrior, DepthView, PriorSpace};
 use diffusion::OnnxDenoiser;
 use inpaint::Inpainter;
+use leftover_depth::prefer_leftover_depth;
 use photo_depth::{correct_hole_depth, DepthScale};
 use rectify::Intrinsics;
 use source_views::SourceView;
@@ -302,6 +306,26 @@ impl Completer {
             *scale = correct_hole_depth(i, &cameras[i], depth, hole, sources, &photos, PHOTO_DEPTH_TOLERANCE);
         });
         views.into_iter().map(|(_, scale)| scale).collect()
+    }
+
+    /// Stage 3b's first step (`leftover_depth`): per view, the fill pixels where the `leftovers`
+    /// (the depth the render after removal shows where it is opaque, 0 elsewhere) make the other
+    /// views' photos agree better take that depth. Views run on all cores. Returns the pixels
+    /// changed per view.
+    pub fn prefer_leftover_depths(
+        &self,
+        cameras: &[Camera],
+        sources: &[SourceView],
+        leftovers: &[Vec<f32>],
+        completed: &mut [Completed],
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Vec<usize> {
+        let mut views: Vec<(&mut Completed, usize)> = completed.iter_mut().map(|c| (c, 0)).collect();
+        let photos: Vec<Vec<[f32; 3]>> = sources.iter().map(|s| interleave_rgb(s.photo, s.photo.len() / 3)).collect();
+        for_each_item(&mut views, progress, |i, (c, taken)| {
+            *taken = prefer_leftover_depth(i, &cameras[i], c, &leftovers[i], sources, &photos, PHOTO_DEPTH_TOLERANCE);
+        });
+        views.into_iter().map(|(_, taken)| taken).collect()
     }
 
     /// Stage 3c, depth-guided color transfer over the whole `hole` of every view (covered pixels
