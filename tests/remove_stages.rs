@@ -487,38 +487,12 @@ fn color_transfer_maps_a_source_photos_exposure_to_the_targets() {
 fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     use cogeo::removal::complete::photo_depth::correct_hole_depth;
     use cogeo::removal::complete::source_views::SourceView;
-    use cogeo::scene::Camera;
+    use common::wall;
     // a textured wall at z = 5 seen by a target and three sources 1.5 to the side, above, below
     let (w, h) = (96usize, 72usize);
-    let cam = |name: &str, x: f64, y: f64| {
-        Camera::look_at(name, w as u32, h as u32, 60.0, [x, y, 0.0], [x, y, 5.0], [0.0, -1.0, 0.0])
-    };
+    let cam = |name: &str, x: f64, y: f64| wall::camera(name, w, h, x, y);
     let cams = [cam("t", 0.0, 0.0), cam("a", 1.5, 0.0), cam("b", -1.5, 0.5), cam("c", 0.3, -1.5)];
-    let tau = std::f64::consts::TAU;
-    let color = |p: [f64; 3]| {
-        let s = (tau * p[0] / 0.36).sin() * (tau * p[1] / 0.5).cos();
-        [0.5 + 0.3 * s, 0.5 - 0.2 * (tau * (p[0] + p[1]) / 0.7).sin(), 0.4 + 0.1 * s]
-    };
-    let photos: Vec<Vec<f32>> = cams
-        .iter()
-        .map(|c| {
-            let mut photo = vec![0f32; 3 * w * h];
-            for p in 0..w * h {
-                let (u, v) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
-                // the camera looks along +z: the wall point under a pixel, in the world
-                let (x, y) = ((u - c.cx) / c.fx * 5.0, (v - c.cy) / c.fy * 5.0);
-                let ctr = c.center();
-                let r = c.rotation;
-                let pt = [0, 1, 2].map(|k| ctr[k] + r[0][k] * x + r[1][k] * y + r[2][k] * 5.0);
-                assert!((pt[2] - 5.0).abs() < 1e-9);
-                let rgb = color(pt);
-                for k in 0..3 {
-                    photo[k * w * h + p] = rgb[k] as f32;
-                }
-            }
-            photo
-        })
-        .collect();
+    let photos = wall::photos(&cams);
     let no_hole = vec![false; w * h];
     let (depth, alpha) = (vec![5.0f32; w * h], vec![1.0f32; w * h]);
     let sources: Vec<SourceView> = cams

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod onnx;
+pub mod wall;
 
 use cogeo::gpu::{DeviceChoice, Gpu};
 use cogeo::rng::Rng;

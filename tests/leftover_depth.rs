@@ -1,0 +1,160 @@
+//! The leftovers' depth against the closed form of a textured wall (common/wall.rs): a fill
+//! pixel takes the depth of the Gaussians left behind the object only where the other views'
+//! photos agree on it better than on the completed depth.
+
+mod common;
+
+use cogeo::removal::complete::leftover_depth::prefer_leftover_depth;
+use cogeo::removal::complete::source_views::SourceView;
+use cogeo::removal::complete::Completed;
+use cogeo::scene::exposure::ColorAffine;
+use common::wall::{self, WALL_Z};
+
+/// Four fill regions of a view of the wall (z = 5), with a completed and a leftover depth each:
+/// A, completed 2 % too near, leftover on the wall: the photos agree on the leftover, which wins;
+/// B, the other way round: the completion stays;
+/// C, completed 20 % too near, where no view's depth says it saw the point, leftover on the wall:
+///    only the leftover's point was seen, and it wins;
+/// D, completed 20 % too near, no leftover (not covered): stays.
+#[test]
+fn fill_takes_the_leftover_depth_only_where_the_photos_agree_on_it_better() {
+    let (w, h) = (96usize, 72usize);
+    let cam = |name: &str, x: f64, y: f64| wall::camera(name, w, h, x, y);
+    let cams = [cam("t", 0.0, 0.0), cam("a", 1.5, 0.0), cam("b", -1.5, 0.5), cam("c", 0.3, -1.5)];
+    let photos = wall::photos(&cams);
+    let no_hole = vec![false; w * h];
+    let (depth, alpha) = (vec![WALL_Z as f32; w * h], vec![1.0f32; w * h]);
+    let sources: Vec<SourceView> = cams
+        .iter()
+        .zip(&photos)
+        .map(|(camera, photo)| SourceView {
+            camera,
+            photo,
+            hole: &no_hole,
+            depth: &depth,
+            alpha: &alpha,
+            photo_colors: ColorAffine::IDENTITY,
+        })
+        .collect();
+    let interleaved: Vec<Vec<[f32; 3]>> = photos.iter().map(|p| cogeo::image_ops::interleave_rgb(p, w * h)).collect();
+    let region = |p: usize| {
+        let (x, y) = (p % w, p / w);
+        match (x, y) {
+            (20..40, 16..34) => Some('A'),
+            (56..76, 16..34) => Some('B'),
+            (20..40, 40..58) => Some('C'),
+            (56..76, 40..58) => Some('D'),
+            _ => None,
+        }
+    };
+    let z = WALL_Z as f32;
+    // (completed, leftover) depth
+    let depths = |p: usize| match region(p) {
+        Some('A') => (0.98 * z, z),
+        Some('B') => (z, 0.98 * z),
+        Some('C') => (0.8 * z, z),
+        Some('D') => (0.8 * z, 0.0),
+        _ => (z, z),
+    };
+    let completed_at = |p: usize| depths(p).0;
+    let fill: Vec<bool> = (0..w * h).map(|p| region(p).is_some()).collect();
+    let leftover: Vec<f32> = (0..w * h).map(|p| depths(p).1).collect();
+    let mut completed = Completed {
+        fill: fill.clone(),
+        rgb: vec![0.5; 3 * w * h],
+        depth: (0..w * h).map(completed_at).collect(),
+        surfaces: vec![0; w * h],
+        planes: Vec::new(),
+        scale: 1.0,
+        shift: 0.0,
+        space: None,
+        fit_pixels: 0,
+        residual: 0.0,
+        texture_pending: false,
+        farther_covered: 0,
+    };
+    let taken = prefer_leftover_depth(0, &cams[0], &mut completed, &leftover, &sources, &interleaved, 0.05);
+    // the wall point under a pixel lies inside at least two other views' images
+    let seen_twice = |p: usize| {
+        let pt = cams[0].pixel_point(p % w, p / w, WALL_Z);
+        cams[1..].iter().filter(|s| s.project_to_image(pt).is_some()).count() >= 2
+    };
+    let on_wall = |p: usize| completed.depth[p] == z;
+    let share = |r: char, f: &dyn Fn(usize) -> bool| {
+        let pixels: Vec<usize> = (0..w * h).filter(|&p| region(p) == Some(r) && seen_twice(p)).collect();
+        assert!(pixels.len() > 300, "region {r}: {} pixels", pixels.len());
+        pixels.iter().filter(|&&p| f(p)).count() as f64 / pixels.len() as f64
+    };
+    let a = share('A', &on_wall);
+    let c = share('C', &on_wall);
+    assert!(a > 0.95 && c > 0.95, "the leftover depth where the photos agree on it: A {a}, C {c}");
+    let b = share('B', &on_wall);
+    assert!(b == 1.0, "the completed depth where the photos agree on it: B {b}");
+    assert!((0..w * h).filter(|&p| region(p) == Some('D')).all(|p| completed.depth[p] == 0.8 * z), "D: no leftover");
+    assert!((0..w * h).filter(|&p| !fill[p]).all(|p| completed.depth[p] == z), "off the fill nothing changes");
+    let changed = (0..w * h).filter(|&p| completed.depth[p] != completed_at(p)).count();
+    assert_eq!(taken, changed);
+}
+
+/// `EditedView::take_leftover_colors`: of a view's fill pixels, exactly those no photo lent a
+/// color and the leftovers cover (alpha at least keep_alpha) take the leftovers' render, mapped
+/// into the photo's colors (here photo = 0.5 render + 0.1 per channel), and stop counting as
+/// invented.
+#[test]
+fn untransferred_fill_under_the_leftovers_takes_their_render_in_the_photos_colors() {
+    use cogeo::removal::select::{MaskedView, Rendered};
+    use cogeo::removal::view::EditedView;
+    let (w, h) = (16usize, 16usize);
+    let n = w * h;
+    let camera = wall::camera("v", w, h, 0.0, 0.0);
+    let mut rng = cogeo::rng::Rng::new(7);
+    let render = |rng: &mut cogeo::rng::Rng| (0..3 * n).map(|_| 0.1 + 0.8 * rng.uniform() as f32).collect::<Vec<f32>>();
+    let before = render(&mut rng);
+    let photo: Vec<f32> = before.iter().map(|&c| 0.5 * c + 0.1).collect();
+    let leftover_rgb = render(&mut rng);
+    // the hole: the middle 8 x 8; in it, the leftovers' alpha falls from 1 (left) to 0.3 (right)
+    let hole: Vec<bool> = (0..n).map(|p| (4..12).contains(&(p % w)) && (4..12).contains(&(p / w))).collect();
+    let alpha: Vec<f32> = (0..n).map(|p| if hole[p] { 1.0 - 0.1 * ((p % w) as f32 - 4.0) } else { 1.0 }).collect();
+    let rendered = |rgb: Vec<f32>, alpha: Vec<f32>| Rendered { rgb, alpha, depth: vec![5.0; n], weight: vec![0.0; n] };
+    let masked = MaskedView {
+        before: rendered(before, vec![1.0; n]),
+        after_removal: rendered(leftover_rgb.clone(), alpha.clone()),
+        hole: hole.clone(),
+        fill: hole.clone(),
+        footprint: hole.clone(),
+    };
+    let mut view = EditedView::new(&camera, Some(&photo), masked);
+    let invented = vec![0.25f32; 3 * n];
+    view.completed = Some(Completed {
+        fill: hole.clone(),
+        rgb: invented.clone(),
+        depth: vec![5.0; n],
+        surfaces: vec![0; n],
+        planes: Vec::new(),
+        scale: 1.0,
+        shift: 0.0,
+        space: None,
+        fit_pixels: 0,
+        residual: 0.0,
+        texture_pending: false,
+        farther_covered: 0,
+    });
+    // the top half of the hole took a photo's color
+    let transferred: Vec<bool> = (0..n).map(|p| hole[p] && p / w < 8).collect();
+    view.transferred = Some(transferred.clone());
+    let keep_alpha = 0.75;
+    let taken = view.take_leftover_colors(keep_alpha);
+    let expected: Vec<bool> = (0..n).map(|p| hole[p] && !transferred[p] && alpha[p] >= keep_alpha).collect();
+    // columns 4..=6 of the hole's 4 lower rows: alpha 1, 0.9, 0.8 (0.7 and under stay invented)
+    assert_eq!(taken, 12);
+    assert_eq!(taken, expected.iter().filter(|&&e| e).count());
+    let rgb = &view.completed.as_ref().unwrap().rgb;
+    for p in 0..n {
+        for c in 0..3 {
+            let want = if expected[p] { 0.5 * leftover_rgb[c * n + p] + 0.1 } else { 0.25 };
+            assert!((rgb[c * n + p] - want).abs() < 1e-4, "pixel {p} channel {c}: {} vs {want}", rgb[c * n + p]);
+        }
+    }
+    let invented_after = view.invented();
+    assert!((0..n).all(|p| invented_after[p] == (hole[p] && !transferred[p] && !expected[p])));
+}
