@@ -7,9 +7,12 @@
 //!    the part the remaining Gaussians do not cover is to be synthesized.
 //! 3. Completion per view (complete/): inpainting, depth anchoring, depth refinement, the
 //!    depth's planes guiding the built-in inpainter. Then the hole's depth is corrected to where
-//!    the captured photos agree (complete/photo_depth.rs), and colors of hole pixels that other
-//!    views saw come from those views' captured images (complete/transfer.rs), which also
-//!    corrects covered but poorly rendered ones; only the rest of the fill stays invented.
+//!    the captured photos agree: the depth of the Gaussians left behind the objects where the
+//!    photos prefer it (complete/leftover_depth.rs), then one factor and a local search
+//!    (complete/photo_depth.rs). Colors of hole pixels that other views saw come from those
+//!    views' captured images (complete/transfer.rs), which also corrects covered but poorly
+//!    rendered ones; of the rest, what the leftovers cover takes their render
+//!    (`EditedView::take_leftover_colors`), and only what remains stays invented.
 //! 4. Fusion and pruning (fuse.rs, prune.rs): completed depth back-projected into new Gaussians;
 //!    sparse background outliers near them pruned. Then (consensus.rs) which invented pixels each
 //!    view's refinement keeps.
@@ -87,6 +90,8 @@ pub struct RemoveOptions {
     /// least this alpha keep their render, unless it lies 1.25x behind the surfaces around the
     /// hole; 1 fills the whole hole. The background Gaussians left behind the removed objects never
     /// keep a pixel: it is filled (photo colors where other views saw it) and gets new Gaussians.
+    /// Where they cover a fill pixel with at least this alpha, their depth competes with the
+    /// completed one on photo-consistency, and their render is its color where no photo lent one.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
     #[command(flatten)]
