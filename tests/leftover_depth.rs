@@ -5,9 +5,7 @@
 mod common;
 
 use cogeo::removal::complete::leftover_depth::prefer_leftover_depth;
-use cogeo::removal::complete::source_views::SourceView;
 use cogeo::removal::complete::Completed;
-use cogeo::scene::exposure::ColorAffine;
 use common::wall::{self, WALL_Z};
 
 /// Four fill regions of a view of the wall (z = 5), with a completed and a leftover depth each:
@@ -24,18 +22,7 @@ fn fill_takes_the_leftover_depth_only_where_the_photos_agree_on_it_better() {
     let photos = wall::photos(&cams);
     let no_hole = vec![false; w * h];
     let (depth, alpha) = (vec![WALL_Z as f32; w * h], vec![1.0f32; w * h]);
-    let sources: Vec<SourceView> = cams
-        .iter()
-        .zip(&photos)
-        .map(|(camera, photo)| SourceView {
-            camera,
-            photo,
-            hole: &no_hole,
-            depth: &depth,
-            alpha: &alpha,
-            photo_colors: ColorAffine::IDENTITY,
-        })
-        .collect();
+    let sources = wall::sources(&cams, &photos, &no_hole, &depth, &alpha);
     let interleaved: Vec<Vec<[f32; 3]>> = photos.iter().map(|p| cogeo::image_ops::interleave_rgb(p, w * h)).collect();
     let region = |p: usize| {
         let (x, y) = (p % w, p / w);
@@ -59,20 +46,7 @@ fn fill_takes_the_leftover_depth_only_where_the_photos_agree_on_it_better() {
     let completed_at = |p: usize| depths(p).0;
     let fill: Vec<bool> = (0..w * h).map(|p| region(p).is_some()).collect();
     let leftover: Vec<f32> = (0..w * h).map(|p| depths(p).1).collect();
-    let mut completed = Completed {
-        fill: fill.clone(),
-        rgb: vec![0.5; 3 * w * h],
-        depth: (0..w * h).map(completed_at).collect(),
-        surfaces: vec![0; w * h],
-        planes: Vec::new(),
-        scale: 1.0,
-        shift: 0.0,
-        space: None,
-        fit_pixels: 0,
-        residual: 0.0,
-        texture_pending: false,
-        farther_covered: 0,
-    };
+    let mut completed = Completed::unguided(fill.clone(), vec![0.5; 3 * w * h], (0..w * h).map(completed_at).collect());
     let taken = prefer_leftover_depth(0, &cams[0], &mut completed, &leftover, &sources, &interleaved, 0.05);
     // the wall point under a pixel lies inside at least two other views' images
     let seen_twice = |p: usize| {
@@ -125,20 +99,7 @@ fn untransferred_fill_under_the_leftovers_takes_their_render_in_the_photos_color
     };
     let mut view = EditedView::new(&camera, Some(&photo), masked);
     let invented = vec![0.25f32; 3 * n];
-    view.completed = Some(Completed {
-        fill: hole.clone(),
-        rgb: invented.clone(),
-        depth: vec![5.0; n],
-        surfaces: vec![0; n],
-        planes: Vec::new(),
-        scale: 1.0,
-        shift: 0.0,
-        space: None,
-        fit_pixels: 0,
-        residual: 0.0,
-        texture_pending: false,
-        farther_covered: 0,
-    });
+    view.completed = Some(Completed::unguided(hole.clone(), invented.clone(), vec![5.0; n]));
     // the top half of the hole took a photo's color
     let transferred: Vec<bool> = (0..n).map(|p| hole[p] && p / w < 8).collect();
     view.transferred = Some(transferred.clone());

@@ -486,7 +486,6 @@ fn color_transfer_maps_a_source_photos_exposure_to_the_targets() {
 #[test]
 fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     use cogeo::removal::complete::photo_depth::correct_hole_depth;
-    use cogeo::removal::complete::source_views::SourceView;
     use common::wall;
     // a textured wall at z = 5 seen by a target and three sources 1.5 to the side, above, below
     let (w, h) = (96usize, 72usize);
@@ -495,18 +494,7 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     let photos = wall::photos(&cams);
     let no_hole = vec![false; w * h];
     let (depth, alpha) = (vec![5.0f32; w * h], vec![1.0f32; w * h]);
-    let sources: Vec<SourceView> = cams
-        .iter()
-        .zip(&photos)
-        .map(|(camera, photo)| SourceView {
-            camera,
-            photo,
-            hole: &no_hole,
-            depth: &depth,
-            alpha: &alpha,
-            photo_colors: cogeo::scene::exposure::ColorAffine::IDENTITY,
-        })
-        .collect();
+    let sources = wall::sources(&cams, &photos, &no_hole, &depth, &alpha);
     // two holes whose completed depth is 2 % too near and 1 % too far
     let in_a = |p: usize| (16..40).contains(&(p % w)) && (18..42).contains(&(p / w));
     let in_b = |p: usize| (56..80).contains(&(p % w)) && (28..52).contains(&(p / w));

@@ -2,6 +2,8 @@
 //! closed form that the multi-view stages (photo-consistent depth, the leftovers' depth) are
 //! checked against. Every photo is rendered from the wall's color function exactly.
 
+use cogeo::removal::complete::source_views::SourceView;
+use cogeo::scene::exposure::ColorAffine;
 use cogeo::scene::Camera;
 
 pub const WALL_Z: f64 = 5.0;
@@ -39,5 +41,20 @@ pub fn photos(cams: &[Camera]) -> Vec<Vec<f32>> {
             }
             photo
         })
+        .collect()
+}
+
+/// The cameras as sources of their `photos`, each with the same `hole`, original `depth` and
+/// `alpha`, and the photos' colors the scene's.
+pub fn sources<'a>(
+    cams: &'a [Camera],
+    photos: &'a [Vec<f32>],
+    hole: &'a [bool],
+    depth: &'a [f32],
+    alpha: &'a [f32],
+) -> Vec<SourceView<'a>> {
+    cams.iter()
+        .zip(photos)
+        .map(|(camera, photo)| SourceView { camera, photo, hole, depth, alpha, photo_colors: ColorAffine::IDENTITY })
         .collect()
 }

@@ -208,6 +208,27 @@ pub struct Completed {
     pub farther_covered: usize,
 }
 
+impl Completed {
+    /// A completion with no depth guidance behind it: no planes, the prior's fit the identity.
+    pub fn unguided(fill: Vec<bool>, rgb: Vec<f32>, depth: Vec<f32>) -> Completed {
+        let n = fill.len();
+        Completed {
+            fill,
+            rgb,
+            depth,
+            surfaces: vec![0; n],
+            planes: Vec::new(),
+            scale: 1.0,
+            shift: 0.0,
+            space: None,
+            fit_pixels: 0,
+            residual: 0.0,
+            texture_pending: false,
+            farther_covered: 0,
+        }
+    }
+}
+
 impl Completer {
     /// Loads the models `cfg` names (before any GPU work, so a bad path fails at once).
     /// `views` names the edited views and gives their sizes, for `--inpainted`.
@@ -454,20 +475,7 @@ impl Completer {
                 v.expected_depth.iter().zip(&valid).filter(|(_, &ok)| ok).map(|(&d, _)| d).collect();
             let mean = if covered.is_empty() { 1.0 } else { covered.iter().sum::<f32>() / covered.len() as f32 };
             let depth = (0..w * h).map(|i| if v.alpha[i] > 0.05 { v.expected_depth[i] } else { mean }).collect();
-            return Ok(Completed {
-                fill: v.fill.to_vec(),
-                rgb,
-                depth,
-                surfaces: vec![0; w * h],
-                planes: Vec::new(),
-                scale: 1.0,
-                shift: 0.0,
-                space: None,
-                fit_pixels: 0,
-                residual: 0.0,
-                texture_pending: false,
-                farther_covered: 0,
-            });
+            return Ok(Completed::unguided(v.fill.to_vec(), rgb, depth));
         }
         let view = DepthView {
             width: w,
