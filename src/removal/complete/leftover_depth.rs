@@ -2,17 +2,17 @@
 //! completed depth of a fill pixel comes from the surfaces around the hole (planes continued, a
 //! smooth prior in between). On a real capture the surface behind an object is often not what
 //! the ring around the hole continues: on the cup composite a tumbler's base stood beside the
-//! box, the prior bent the desk's depth towards it, and the hole's depth came out 10-30 % in
-//! front of the desk, so few views "saw" the completed points and most of the hole was invented
-//! (held-out renders: a dark blob ringed by the tumbler's pale colors). The Gaussians the capture
+//! box, the prior bent the desk's depth towards it, beyond the photo-depth stage's 5 % search,
+//! so few views "saw" the completed points and most of the hole was invented (the targets: a
+//! dark blob ringed by pale specks; the held-out renders: a pale haze). The Gaussians the capture
 //! left there were trained by every view that saw the desk around the box, and their depth is
 //! what those views' photos agree on.
 //!
 //! So, per fill pixel that those Gaussians cover (alpha at least the removal's `keep_alpha`), the
 //! two depths compete on photo-consistency: the color variance across the other views that saw
-//! each point (`SeenPoint`, off their holes, at their original depth), summed over a window as
-//! the photo-depth stage does. The leftover depth wins where its window agrees better, or where
-//! two views saw its point and no two saw the completed one. Elsewhere the completion stands: on
+//! each point (`sees`: off their holes, at their original depth), summed over a window as the
+//! photo-depth stage does. The leftover depth wins where its window agrees clearly better
+//! (`BETTER`), or where two views saw its point and no two saw the completed one. Elsewhere the completion stands: on
 //! the synth rooms, where the planes continue the floor exactly, a leftover depth taken
 //! everywhere cost 1.3-2.7 dB masked PSNR.
 
