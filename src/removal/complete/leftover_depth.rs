@@ -12,9 +12,9 @@
 //! two depths compete on photo-consistency: the color variance across the other views that saw
 //! each point (`sees`: off their holes, at their original depth), summed over a window as the
 //! photo-depth stage does. The leftover depth wins where its window agrees clearly better
-//! (`BETTER`), or where two views saw its point and no two saw the completed one. Elsewhere the completion stands: on
-//! the synth rooms, where the planes continue the floor exactly, a leftover depth taken
-//! everywhere cost 1.3-2.7 dB masked PSNR.
+//! (`BETTER`), or where two views saw its point and no two saw the completed one. Elsewhere the
+//! completion stands: on the synth rooms, where the planes continue the floor exactly, a
+//! leftover depth taken everywhere cost 1.3-2.7 dB masked PSNR.
 
 use super::source_views::{back_project, sees, SourceView};
 use super::Completed;
