@@ -316,14 +316,12 @@ fn correct_depths(
         .collect();
     let mut completed = take_completions(views);
     let (sources, holes) = sources_and_holes(views);
-    let taken = completer.prefer_leftover_depths(cameras, &sources, &leftovers, &mut completed, &mut |d, t| {
-        progress("leftover depth", d, t)
+    let found = completer.correct_depths(cameras, &sources, &holes, &leftovers, &mut completed, &mut |d, t| {
+        progress("photo depth", d, t)
     });
-    let scales =
-        completer.correct_depths(cameras, &sources, &holes, &mut completed, &mut |d, t| progress("photo depth", d, t));
     drop((sources, holes));
     put_back(views, completed);
-    for ((v, scale), taken) in views.iter_mut().zip(scales).zip(taken) {
+    for (v, (scale, taken)) in views.iter_mut().zip(found) {
         v.report.hole_depth_scale = Some(scale);
         v.report.leftover_depth_pixels = Some(taken);
     }

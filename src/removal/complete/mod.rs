@@ -305,48 +305,33 @@ impl Completer {
             }
     }
 
-    /// Stage 3b, photo-consistent hole depth (`photo_depth`): corrects the completed depth of
-    /// every view's `hole` so that the other views' photos (`sources`, one per view) agree on its
-    /// colors. It runs before the color transfer and the fusion, and without the transfer too,
-    /// since both place points by this depth. Views are independent (the sources hold the
-    /// original renders), so they run on all cores. Returns the factor found per view. The
-    /// pipeline calls it when `photo_depth` is set.
+    /// Stage 3b, photo-consistent hole depth: per view, first the fill pixels where the
+    /// `leftovers` (the depth the render after removal shows where it is opaque, 0 elsewhere) make
+    /// the other views' photos agree better take that depth (`leftover_depth`), then the depth of
+    /// the whole `hole` is corrected so that the other views' photos (`sources`, one per view)
+    /// agree on its colors (`photo_depth`). It runs before the color transfer and the fusion, and
+    /// without the transfer too, since both place points by this depth. Views are independent
+    /// (the sources hold the original renders), so they run on all cores. Returns per view the
+    /// factor found and the pixels that took the leftover depth. The pipeline calls it when
+    /// `photo_depth` is set.
     pub fn correct_depths(
         &self,
         cameras: &[Camera],
         sources: &[SourceView],
         holes: &[&[bool]],
-        completed: &mut [Completed],
-        progress: &mut dyn FnMut(usize, usize),
-    ) -> Vec<DepthScale> {
-        let mut views: Vec<(&mut Completed, DepthScale)> =
-            completed.iter_mut().map(|c| (c, DepthScale::unchanged())).collect();
-        let photos: Vec<Vec<[f32; 3]>> = sources.iter().map(|s| interleave_rgb(s.photo, s.photo.len() / 3)).collect();
-        for_each_item(&mut views, progress, |i, (c, scale)| {
-            let (depth, hole) = (&mut c.depth, holes[i]);
-            *scale = correct_hole_depth(i, &cameras[i], depth, hole, sources, &photos, PHOTO_DEPTH_TOLERANCE);
-        });
-        views.into_iter().map(|(_, scale)| scale).collect()
-    }
-
-    /// Stage 3b's first step (`leftover_depth`): per view, the fill pixels where the `leftovers`
-    /// (the depth the render after removal shows where it is opaque, 0 elsewhere) make the other
-    /// views' photos agree better take that depth. Views run on all cores. Returns the pixels
-    /// changed per view.
-    pub fn prefer_leftover_depths(
-        &self,
-        cameras: &[Camera],
-        sources: &[SourceView],
         leftovers: &[Vec<f32>],
         completed: &mut [Completed],
         progress: &mut dyn FnMut(usize, usize),
-    ) -> Vec<usize> {
-        let mut views: Vec<(&mut Completed, usize)> = completed.iter_mut().map(|c| (c, 0)).collect();
+    ) -> Vec<(DepthScale, usize)> {
+        let mut views: Vec<(&mut Completed, (DepthScale, usize))> =
+            completed.iter_mut().map(|c| (c, (DepthScale::unchanged(), 0))).collect();
         let photos: Vec<Vec<[f32; 3]>> = sources.iter().map(|s| interleave_rgb(s.photo, s.photo.len() / 3)).collect();
-        for_each_item(&mut views, progress, |i, (c, taken)| {
+        for_each_item(&mut views, progress, |i, (c, (scale, taken))| {
             *taken = prefer_leftover_depth(i, &cameras[i], c, &leftovers[i], sources, &photos, PHOTO_DEPTH_TOLERANCE);
+            let (depth, hole) = (&mut c.depth, holes[i]);
+            *scale = correct_hole_depth(i, &cameras[i], depth, hole, sources, &photos, PHOTO_DEPTH_TOLERANCE);
         });
-        views.into_iter().map(|(_, taken)| taken).collect()
+        views.into_iter().map(|(_, found)| found).collect()
     }
 
     /// Stage 3c, depth-guided color transfer over the whole `hole` of every view (covered pixels
