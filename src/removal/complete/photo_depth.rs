@@ -54,6 +54,35 @@ const MIN_WINDOW_PIXELS: usize = 8;
 /// pixel's correction fades out.
 const FADE_PIXELS: usize = 8;
 
+/// The spread of the colors several photos show of one point: sums and sums of squares, so that
+/// adding a color allocates nothing.
+#[derive(Default)]
+pub struct ColorSpread {
+    k: usize,
+    sum: [f64; 3],
+    squares: [f64; 3],
+}
+
+impl ColorSpread {
+    pub fn add(&mut self, rgb: [f32; 3]) {
+        for c in 0..3 {
+            let v = rgb[c] as f64;
+            self.sum[c] += v;
+            self.squares[c] += v * v;
+        }
+        self.k += 1;
+    }
+
+    /// Color variance (RGB summed); None with fewer than two colors.
+    pub fn variance(&self) -> Option<f64> {
+        if self.k < 2 {
+            return None;
+        }
+        let k = self.k as f64;
+        Some((0..3).map(|c| (self.squares[c] / k - (self.sum[c] / k).powi(2)).max(0.0)).sum())
+    }
+}
+
 /// The hole pixels of one view that two or more other views saw, with those views: pixel i is
 /// `pixels[i]`, its views `views[starts[i]..starts[i + 1]]`, in one flat list since the cost
 /// reads them ~130 times per pixel.
@@ -73,8 +102,8 @@ impl SeenPixels<'_> {
     /// Color variance (RGB summed) across the views that still see pixel `i`'s point off their
     /// holes at its depth times `scale`; None with fewer than two.
     fn variance(&self, i: usize, scale: f64) -> Option<f64> {
-        // sums and sums of squares: no allocation per call (it runs ~130 times per pixel)
-        let (mut k, mut sum, mut squares) = (0usize, [0f64; 3], [0f64; 3]);
+        // no allocation per call (it runs ~130 times per pixel)
+        let mut spread = ColorSpread::default();
         let range = self.starts[i]..self.starts[i + 1];
         for (&j, [a, b]) in self.views[range.clone()].iter().zip(&self.lines[range]) {
             let s = &self.sources[j as usize];
@@ -84,19 +113,9 @@ impl SeenPixels<'_> {
             if s.hole[y as usize * sw + x as usize] {
                 continue;
             }
-            let rgb = sample_bilinear_pixels(&self.photos[j as usize], sw, sh, x, y);
-            for c in 0..3 {
-                let v = rgb[c] as f64;
-                sum[c] += v;
-                squares[c] += v * v;
-            }
-            k += 1;
+            spread.add(sample_bilinear_pixels(&self.photos[j as usize], sw, sh, x, y));
         }
-        if k < 2 {
-            return None;
-        }
-        let k = k as f64;
-        Some((0..3).map(|c| (squares[c] / k - (sum[c] / k).powi(2)).max(0.0)).sum())
+        spread.variance()
     }
 
     /// Mean variance over all pixels (those that have one, in pixel order; infinity when none
