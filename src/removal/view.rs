@@ -139,14 +139,14 @@ impl<'a> EditedView<'a> {
         };
         let leftovers = &self.masked.after_removal;
         let n = leftovers.alpha.len();
-        let in_photo_colors = self.photo_colors.apply(&leftovers.rgb);
         let mut taken = 0;
         for p in 0..n {
             if !self.masked.fill[p] || transferred[p] || leftovers.alpha[p] < keep_alpha {
                 continue;
             }
+            let in_photo_colors = self.photo_colors.apply_pixel([0, 1, 2].map(|c| leftovers.rgb[c * n + p] as f64));
             for c in 0..3 {
-                completed.rgb[c * n + p] = in_photo_colors[c * n + p].clamp(0.0, 1.0);
+                completed.rgb[c * n + p] = (in_photo_colors[c] as f32).clamp(0.0, 1.0);
             }
             transferred[p] = true;
             taken += 1;
