@@ -17,13 +17,8 @@ use common::wall::{self, WALL_Z};
 #[test]
 fn fill_takes_the_leftover_depth_only_where_the_photos_agree_on_it_better() {
     let (w, h) = (96usize, 72usize);
-    let cam = |name: &str, x: f64, y: f64| wall::camera(name, w, h, x, y);
-    let cams = [cam("t", 0.0, 0.0), cam("a", 1.5, 0.0), cam("b", -1.5, 0.5), cam("c", 0.3, -1.5)];
-    let photos = wall::photos(&cams);
-    let no_hole = vec![false; w * h];
-    let (depth, alpha) = (vec![WALL_Z as f32; w * h], vec![1.0f32; w * h]);
-    let sources = wall::sources(&cams, &photos, &no_hole, &depth, &alpha);
-    let interleaved: Vec<Vec<[f32; 3]>> = photos.iter().map(|p| cogeo::image_ops::interleave_rgb(p, w * h)).collect();
+    let rig = wall::Rig::new(w, h);
+    let sources = rig.sources();
     let region = |p: usize| {
         let (x, y) = (p % w, p / w);
         match (x, y) {
@@ -47,22 +42,16 @@ fn fill_takes_the_leftover_depth_only_where_the_photos_agree_on_it_better() {
     let fill: Vec<bool> = (0..w * h).map(|p| region(p).is_some()).collect();
     let leftover: Vec<f32> = (0..w * h).map(|p| depths(p).1).collect();
     let mut completed = Completed::unguided(fill.clone(), vec![0.5; 3 * w * h], (0..w * h).map(completed_at).collect());
-    let taken = prefer_leftover_depth(0, &cams[0], &mut completed, &leftover, &sources, &interleaved, 0.05);
-    // the wall point under a pixel lies inside at least two other views' images
-    let seen_twice = |p: usize| {
-        let pt = cams[0].pixel_point(p % w, p / w, WALL_Z);
-        cams[1..].iter().filter(|s| s.project_to_image(pt).is_some()).count() >= 2
-    };
-    let on_wall = |p: usize| completed.depth[p] == z;
-    let share = |r: char, f: &dyn Fn(usize) -> bool| {
-        let pixels: Vec<usize> = (0..w * h).filter(|&p| region(p) == Some(r) && seen_twice(p)).collect();
+    let taken = prefer_leftover_depth(0, &rig.cams[0], &mut completed, &leftover, &sources, &rig.interleaved, 0.05);
+    // the share of region r's pixels seen twice whose depth is the wall's
+    let on_wall = |r: char| {
+        let pixels: Vec<usize> = (0..w * h).filter(|&p| region(p) == Some(r) && rig.seen_twice(p)).collect();
         assert!(pixels.len() > 300, "region {r}: {} pixels", pixels.len());
-        pixels.iter().filter(|&&p| f(p)).count() as f64 / pixels.len() as f64
+        pixels.iter().filter(|&&p| completed.depth[p] == z).count() as f64 / pixels.len() as f64
     };
-    let a = share('A', &on_wall);
-    let c = share('C', &on_wall);
+    let (a, c) = (on_wall('A'), on_wall('C'));
     assert!(a > 0.95 && c > 0.95, "the leftover depth where the photos agree on it: A {a}, C {c}");
-    let b = share('B', &on_wall);
+    let b = on_wall('B');
     assert!(b == 1.0, "the completed depth where the photos agree on it: B {b}");
     assert!((0..w * h).filter(|&p| region(p) == Some('D')).all(|p| completed.depth[p] == 0.8 * z), "D: no leftover");
     assert!((0..w * h).filter(|&p| !fill[p]).all(|p| completed.depth[p] == z), "off the fill nothing changes");

@@ -489,12 +489,8 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     use common::wall;
     // a textured wall at z = 5 seen by a target and three sources 1.5 to the side, above, below
     let (w, h) = (96usize, 72usize);
-    let cam = |name: &str, x: f64, y: f64| wall::camera(name, w, h, x, y);
-    let cams = [cam("t", 0.0, 0.0), cam("a", 1.5, 0.0), cam("b", -1.5, 0.5), cam("c", 0.3, -1.5)];
-    let photos = wall::photos(&cams);
-    let no_hole = vec![false; w * h];
-    let (depth, alpha) = (vec![5.0f32; w * h], vec![1.0f32; w * h]);
-    let sources = wall::sources(&cams, &photos, &no_hole, &depth, &alpha);
+    let rig = wall::Rig::new(w, h);
+    let sources = rig.sources();
     // two holes whose completed depth is 2 % too near and 1 % too far
     let in_a = |p: usize| (16..40).contains(&(p % w)) && (18..42).contains(&(p / w));
     let in_b = |p: usize| (56..80).contains(&(p % w)) && (28..52).contains(&(p / w));
@@ -510,19 +506,14 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
             }
         })
         .collect();
-    let interleaved: Vec<Vec<[f32; 3]>> = photos.iter().map(|p| cogeo::image_ops::interleave_rgb(p, w * h)).collect();
-    let report = correct_hole_depth(0, &cams[0], &mut completed, &hole, &sources, &interleaved, 0.05);
+    let report = correct_hole_depth(0, &rig.cams[0], &mut completed, &hole, &sources, &rig.interleaved, 0.05);
     // of the 1152 hole pixels, those inside the images of at least two sources
     assert!(report.pixels > 1000, "{report:?}");
     assert!(report.cost_after < 0.05 * report.cost_before, "{report:?}");
     // pixels whose wall point lies inside two or more sources' images are measured; the others
     // (at the hole's edge near the image border) fade towards their completed depth
-    let seen_twice = |p: usize| {
-        let pt = cams[0].pixel_point(p % w, p / w, 5.0);
-        cams[1..].iter().filter(|s| s.project_to_image(pt).is_some()).count() >= 2
-    };
     let error = |p: usize| (completed[p] as f64 / 5.0 - 1.0).abs();
-    let mut errors: Vec<f64> = (0..w * h).filter(|&p| hole[p] && seen_twice(p)).map(error).collect();
+    let mut errors: Vec<f64> = (0..w * h).filter(|&p| hole[p] && rig.seen_twice(p)).map(error).collect();
     assert!(errors.len() > 1000);
     errors.sort_by(f64::total_cmp);
     let (median, worst) = (errors[errors.len() / 2], errors[errors.len() - 1]);
@@ -533,7 +524,7 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     // 8 % too near is beyond the 5 % searched: the least cost lies at the end of the range, which
     // is no minimum, and the depth stays as it was
     let mut far_off: Vec<f32> = (0..w * h).map(|p| if hole[p] { 4.6 } else { 5.0 }).collect();
-    let report = correct_hole_depth(0, &cams[0], &mut far_off, &hole, &sources, &interleaved, 0.2);
+    let report = correct_hole_depth(0, &rig.cams[0], &mut far_off, &hole, &sources, &rig.interleaved, 0.2);
     assert!(report.pixels > 1000 && report.scale == 1.0, "{report:?}");
     assert!((0..w * h).all(|p| far_off[p] == if hole[p] { 4.6 } else { 5.0 }));
 }

@@ -44,17 +44,48 @@ pub fn photos(cams: &[Camera]) -> Vec<Vec<f32>> {
         .collect()
 }
 
-/// The cameras as sources of their `photos`, each with the same `hole`, original `depth` and
-/// `alpha`, and the photos' colors the scene's.
-pub fn sources<'a>(
-    cams: &'a [Camera],
-    photos: &'a [Vec<f32>],
-    hole: &'a [bool],
-    depth: &'a [f32],
-    alpha: &'a [f32],
-) -> Vec<SourceView<'a>> {
-    cams.iter()
-        .zip(photos)
-        .map(|(camera, photo)| SourceView { camera, photo, hole, depth, alpha, photo_colors: ColorAffine::IDENTITY })
-        .collect()
+/// A target camera at the origin and three sources 1.5 to the side, above and below it, with
+/// their photos of the wall and, as sources, no hole and the wall's depth, fully opaque.
+pub struct Rig {
+    pub cams: [Camera; 4],
+    pub photos: Vec<Vec<f32>>,
+    /// The photos as `interleave_rgb` stores them (the multi-view stages read them so).
+    pub interleaved: Vec<Vec<[f32; 3]>>,
+    no_hole: Vec<bool>,
+    depth: Vec<f32>,
+    alpha: Vec<f32>,
+}
+
+impl Rig {
+    pub fn new(w: usize, h: usize) -> Rig {
+        let cam = |name: &str, x: f64, y: f64| camera(name, w, h, x, y);
+        let cams = [cam("t", 0.0, 0.0), cam("a", 1.5, 0.0), cam("b", -1.5, 0.5), cam("c", 0.3, -1.5)];
+        let photos = photos(&cams);
+        let interleaved = photos.iter().map(|p| cogeo::image_ops::interleave_rgb(p, w * h)).collect();
+        let (no_hole, depth, alpha) = (vec![false; w * h], vec![WALL_Z as f32; w * h], vec![1.0; w * h]);
+        Rig { cams, photos, interleaved, no_hole, depth, alpha }
+    }
+
+    /// Every camera as a source of its photo, the photos' colors the scene's.
+    pub fn sources(&self) -> Vec<SourceView<'_>> {
+        self.cams
+            .iter()
+            .zip(&self.photos)
+            .map(|(camera, photo)| SourceView {
+                camera,
+                photo,
+                hole: &self.no_hole,
+                depth: &self.depth,
+                alpha: &self.alpha,
+                photo_colors: ColorAffine::IDENTITY,
+            })
+            .collect()
+    }
+
+    /// Whether the wall point under the target's pixel `p` lies inside at least two sources' images.
+    pub fn seen_twice(&self, p: usize) -> bool {
+        let w = self.cams[0].width as usize;
+        let pt = self.cams[0].pixel_point(p % w, p / w, WALL_Z);
+        self.cams[1..].iter().filter(|s| s.project_to_image(pt).is_some()).count() >= 2
+    }
 }
