@@ -1,6 +1,7 @@
 //! The leftovers' depth against the closed form of a textured wall (common/wall.rs): a fill
 //! pixel takes the depth of the Gaussians left behind the object only where the other views'
-//! photos agree on it better than on the completed depth.
+//! photos agree on it better than on the completed depth. And their colors: where no photo lent
+//! one, and where the transferred ones disagree with them on average.
 
 mod common;
 
@@ -87,13 +88,16 @@ fn untransferred_fill_under_the_leftovers_takes_their_render_in_the_photos_color
         footprint: hole.clone(),
     };
     let mut view = EditedView::new(&camera, Some(&photo), masked);
-    let invented = vec![0.25f32; 3 * n];
-    view.completed = Some(Completed::unguided(hole.clone(), invented.clone(), vec![5.0; n]));
-    // the top half of the hole took a photo's color
+    // the top half of the hole took a photo's color, 0.05 off the leftovers' (in the photo's
+    // colors): close enough to keep it (`leftover_colors::MAX_DISAGREEMENT`); the rest is invented
     let transferred: Vec<bool> = (0..n).map(|p| hole[p] && p / w < 8).collect();
+    let completed_rgb: Vec<f32> =
+        (0..3 * n).map(|i| if transferred[i % n] { 0.5 * leftover_rgb[i] + 0.1 + 0.05 } else { 0.25 }).collect();
+    view.completed = Some(Completed::unguided(hole.clone(), completed_rgb.clone(), vec![5.0; n]));
     view.transferred = Some(transferred.clone());
     let keep_alpha = 0.75;
-    let taken = view.take_leftover_colors(keep_alpha);
+    let (taken, refused) = view.take_leftover_colors(keep_alpha);
+    assert_eq!(refused, 0, "the transferred colors agree with the leftovers'");
     let expected: Vec<bool> = (0..n).map(|p| hole[p] && !transferred[p] && alpha[p] >= keep_alpha).collect();
     // columns 4..=6 of the hole's 4 lower rows: alpha 1, 0.9, 0.8 (0.7 and under stay invented)
     assert_eq!(taken, 12);
@@ -101,10 +105,65 @@ fn untransferred_fill_under_the_leftovers_takes_their_render_in_the_photos_color
     let rgb = &view.completed.as_ref().unwrap().rgb;
     for p in 0..n {
         for c in 0..3 {
-            let want = if expected[p] { 0.5 * leftover_rgb[c * n + p] + 0.1 } else { 0.25 };
+            let want = if expected[p] { 0.5 * leftover_rgb[c * n + p] + 0.1 } else { completed_rgb[c * n + p] };
             assert!((rgb[c * n + p] - want).abs() < 1e-4, "pixel {p} channel {c}: {} vs {want}", rgb[c * n + p]);
         }
     }
     let invented_after = view.invented();
     assert!((0..n).all(|p| invented_after[p] == (hole[p] && !transferred[p] && !expected[p])));
+}
+
+/// `leftover_colors::disagreeing_transfers` on a 40 x 20 view whose leftovers render flat gray
+/// (0.5) over the compared pixels (x in 2..18 and 20..38, y in 2..18; columns 18 and 19 are not
+/// compared, so no window mixes the two halves):
+/// - left, a one-pixel checkerboard 0.5 +- 0.3: every pixel departs by 0.3, its window's mean by
+///   at most 0.3 / 9 (a corner's 3 x 3 window): kept;
+/// - right, rows 2..10, red 0.25 above the leftovers: refused;
+/// - right, rows 10..18, green 0.12 below them (under MAX_DISAGREEMENT): kept, away from the
+///   rows whose windows see the red blotch.
+#[test]
+fn transferred_colors_are_refused_where_their_window_mean_departs_from_the_leftovers() {
+    use cogeo::removal::complete::leftover_colors::{disagreeing_transfers, MAX_DISAGREEMENT};
+    const { assert!(0.3 / 9.0 < MAX_DISAGREEMENT && 0.12 < MAX_DISAGREEMENT && 0.25 > MAX_DISAGREEMENT) };
+    let (w, h) = (40usize, 20usize);
+    let n = w * h;
+    let (left, right) = (2..18usize, 20..38usize);
+    let rows = 2..18usize;
+    let compared: Vec<bool> =
+        (0..n).map(|p| (left.contains(&(p % w)) || right.contains(&(p % w))) && rows.contains(&(p / w))).collect();
+    let leftovers = vec![0.5f32; 3 * n];
+    let transferred: Vec<f32> = (0..3 * n)
+        .map(|i| {
+            let (c, p) = (i / n, i % n);
+            let (x, y) = (p % w, p / w);
+            if left.contains(&x) {
+                if (x + y) % 2 == 0 {
+                    0.8
+                } else {
+                    0.2
+                }
+            } else if y < 10 {
+                if c == 0 {
+                    0.75
+                } else {
+                    0.5
+                }
+            } else if c == 1 {
+                0.38
+            } else {
+                0.5
+            }
+        })
+        .collect();
+    let refused = disagreeing_transfers(&transferred, &leftovers, &compared, w, h);
+    for p in 0..n {
+        let (x, y) = (p % w, p / w);
+        if !compared[p] || left.contains(&x) {
+            assert!(!refused[p], "({x}, {y}): not compared, or the checkerboard");
+        } else if y < 8 {
+            assert!(refused[p], "({x}, {y}): the red blotch");
+        } else if y >= 12 {
+            assert!(!refused[p], "({x}, {y}): the slight green tint");
+        }
+    }
 }

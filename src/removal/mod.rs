@@ -11,8 +11,9 @@
 //!    photos prefer it (complete/leftover_depth.rs), then one factor and a local search
 //!    (complete/photo_depth.rs). Colors of hole pixels that other views saw come from those
 //!    views' captured images (complete/transfer.rs), which also corrects covered but poorly
-//!    rendered ones; of the rest, what the leftovers cover takes their render
-//!    (`EditedView::take_leftover_colors`), and only what remains stays invented.
+//!    rendered ones; where the leftovers cover a pixel, their render replaces the transferred
+//!    colors that disagree with it on average (complete/leftover_colors.rs) and fills what no
+//!    photo lent (`EditedView::take_leftover_colors`); only what remains stays invented.
 //! 4. Fusion and pruning (fuse.rs, prune.rs): completed depth back-projected into new Gaussians;
 //!    sparse background outliers near them pruned. Then (consensus.rs) which invented pixels each
 //!    view's refinement keeps.
@@ -91,7 +92,8 @@ pub struct RemoveOptions {
     /// hole; 1 fills the whole hole. The background Gaussians left behind the removed objects never
     /// keep a pixel: it is filled (photo colors where other views saw it) and gets new Gaussians.
     /// Where they cover a fill pixel with at least this alpha, their depth competes with the
-    /// completed one on photo-consistency, and their render is its color where no photo lent one.
+    /// completed one on photo-consistency, and their render is its color where no photo lent one
+    /// or where the transferred colors around it disagree with it on average.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
     #[command(flatten)]
@@ -328,7 +330,8 @@ fn correct_depths(
 }
 
 /// Stage 3c over every view (`cameras`, the views' own; needs the photos), then the leftovers'
-/// colors where no photo lent one (`EditedView::take_leftover_colors`).
+/// colors where no photo lent one or the photo's disagrees with them
+/// (`EditedView::take_leftover_colors`).
 fn transfer_colors(
     views: &mut [EditedView],
     cameras: &[Camera],
@@ -346,9 +349,11 @@ fn transfer_colors(
         v.report.transferred_pixels = Some(t.iter().filter(|&&f| f).count());
         v.transferred = Some(t);
     }
-    // what no photo lent, where the Gaussians left behind cover it, takes their render
+    // where the Gaussians left behind cover a fill pixel, their render: where no photo lent a
+    // color, and where the transferred colors around it disagree with it
     for v in views.iter_mut() {
-        v.report.leftover_color_pixels = Some(v.take_leftover_colors(keep_alpha));
+        let (taken, refused) = v.take_leftover_colors(keep_alpha);
+        (v.report.leftover_color_pixels, v.report.refused_transfer_pixels) = (Some(taken), Some(refused));
     }
     Ok(())
 }
