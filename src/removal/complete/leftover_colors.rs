@@ -13,7 +13,7 @@
 //! blurred (the synth rooms' checkerboards, the desk's grain) departs from them pixel by pixel
 //! but not on average.
 
-use crate::image_ops::box_sum;
+use crate::image_ops::{box_count, box_sum};
 
 /// Window radius (pixels) of the two means.
 pub const WINDOW_RADIUS: usize = 2;
@@ -44,8 +44,7 @@ pub fn disagreeing_transfers(
     let n = w * h;
     let only_compared =
         |img: &[f32]| -> Vec<f32> { (0..3 * n).map(|i| if compared[i % n] { img[i] } else { 0.0 }).collect() };
-    let weights: Vec<f32> = compared.iter().map(|&c| c as u8 as f32).collect();
-    let count = box_sum(&weights, w, h, 1, WINDOW_RADIUS);
+    let count = box_count(compared, w, h, WINDOW_RADIUS);
     let sum_transferred = box_sum(&only_compared(transferred), w, h, 3, WINDOW_RADIUS);
     let sum_leftovers = box_sum(&only_compared(leftovers), w, h, 3, WINDOW_RADIUS);
     (0..n)
@@ -53,7 +52,7 @@ pub fn disagreeing_transfers(
             compared[p]
                 && (0..3).any(|c| {
                     let i = c * n + p;
-                    ((sum_transferred[i] - sum_leftovers[i]) / count[p]).abs() > MAX_DISAGREEMENT
+                    ((sum_transferred[i] - sum_leftovers[i]) / count[p] as f32).abs() > MAX_DISAGREEMENT
                 })
         })
         .collect()
