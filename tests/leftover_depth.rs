@@ -60,25 +60,48 @@ fn fill_takes_the_leftover_depth_only_where_the_photos_agree_on_it_better() {
     assert_eq!(taken, changed);
 }
 
-/// `EditedView::take_leftover_colors`: of a view's fill pixels, exactly those no photo lent a
-/// color and the leftovers cover (alpha at least keep_alpha) take the leftovers' render, mapped
-/// into the photo's colors (here photo = 0.5 render + 0.1 per channel), and stop counting as
-/// invented.
+/// `EditedView::take_leftover_colors` on a 24 x 24 view with a 16 x 16 hole. Of its fill
+/// pixels, those no photo lent a color, that the leftovers cover (alpha at least keep_alpha) and
+/// whose render looks like the invention on average take the leftovers' render, mapped into the
+/// photo's colors (here photo = 0.5 render + 0.1 per channel), and stop counting as invented.
+/// The leftovers render a one-pixel checkerboard 0.5 +- 0.3 (0.35 +- 0.15 in the photo's
+/// colors) and the invention is flat 0.35: a window's means differ by at most 0.15 / 9 (a 3 x 3
+/// corner window). In a 6 x 6 corner of the covered part the leftovers are a brown smear (0.3,
+/// 0.3, 0.1; 0.25, 0.25, 0.15 in the photo's colors): a window that holds at least 16 of its
+/// pixels (of at most 25, the smear's inner 5 x 5) departs by at least (0.2 * 16 - 0.15) / 25 in
+/// blue, and those pixels keep the invention.
 #[test]
-fn untransferred_fill_under_the_leftovers_takes_their_render_in_the_photos_colors() {
+fn untransferred_fill_under_the_leftovers_takes_their_render_where_it_looks_like_the_invention() {
+    use cogeo::removal::complete::leftover_colors::{MAX_UNLIKE_INVENTION, WINDOW_RADIUS};
     use cogeo::removal::select::{MaskedView, Rendered};
     use cogeo::removal::view::EditedView;
-    let (w, h) = (16usize, 16usize);
+    const { assert!(0.15 / 9.0 < MAX_UNLIKE_INVENTION && (0.2 * 16.0 - 0.15) / 25.0 > MAX_UNLIKE_INVENTION) };
+    assert_eq!(WINDOW_RADIUS, 2, "the bounds above count 5 x 5 windows");
+    let (w, h) = (24usize, 24usize);
     let n = w * h;
+    let (x, y) = (|p: usize| p % w, |p: usize| p / w);
     let camera = wall::camera("v", w, h, 0.0, 0.0);
     let mut rng = cogeo::rng::Rng::new(7);
-    let render = |rng: &mut cogeo::rng::Rng| (0..3 * n).map(|_| 0.1 + 0.8 * rng.uniform() as f32).collect::<Vec<f32>>();
-    let before = render(&mut rng);
+    let before: Vec<f32> = (0..3 * n).map(|_| 0.1 + 0.8 * rng.uniform() as f32).collect();
     let photo: Vec<f32> = before.iter().map(|&c| 0.5 * c + 0.1).collect();
-    let leftover_rgb = render(&mut rng);
-    // the hole: the middle 8 x 8; in it, the leftovers' alpha falls from 1 (left) to 0.3 (right)
-    let hole: Vec<bool> = (0..n).map(|p| (4..12).contains(&(p % w)) && (4..12).contains(&(p / w))).collect();
-    let alpha: Vec<f32> = (0..n).map(|p| if hole[p] { 1.0 - 0.1 * ((p % w) as f32 - 4.0) } else { 1.0 }).collect();
+    // the hole: x and y in 4..20; the leftovers cover x < 16 (alpha 1), not the 4 columns right
+    // of it (alpha 0.5); the rows y < 8 took a photo's color
+    let hole: Vec<bool> = (0..n).map(|p| (4..20).contains(&x(p)) && (4..20).contains(&y(p))).collect();
+    let alpha: Vec<f32> = (0..n).map(|p| if hole[p] && x(p) >= 16 { 0.5 } else { 1.0 }).collect();
+    let transferred: Vec<bool> = (0..n).map(|p| hole[p] && y(p) < 8).collect();
+    let smear = |p: usize| (4..10).contains(&x(p)) && (14..20).contains(&y(p));
+    let inner_smear = |p: usize| x(p) < 9 && y(p) > 14 && smear(p);
+    let leftover_rgb: Vec<f32> = (0..3 * n)
+        .map(|i| {
+            let (c, p) = (i / n, i % n);
+            match (smear(p), c) {
+                (true, 2) => 0.1,
+                (true, _) => 0.3,
+                _ if (x(p) + y(p)) % 2 == 0 => 0.8,
+                _ => 0.2,
+            }
+        })
+        .collect();
     let rendered = |rgb: Vec<f32>, alpha: Vec<f32>| Rendered { rgb, alpha, depth: vec![5.0; n], weight: vec![0.0; n] };
     let masked = MaskedView {
         before: rendered(before, vec![1.0; n]),
@@ -88,29 +111,44 @@ fn untransferred_fill_under_the_leftovers_takes_their_render_in_the_photos_color
         footprint: hole.clone(),
     };
     let mut view = EditedView::new(&camera, Some(&photo), masked);
-    // the top half of the hole took a photo's color, 0.05 off the leftovers' (in the photo's
-    // colors): close enough to keep it (`leftover_colors::MAX_DISAGREEMENT`); the rest is invented
-    let transferred: Vec<bool> = (0..n).map(|p| hole[p] && p / w < 8).collect();
+    // the transferred colors are 0.05 off the leftovers' (in the photo's colors): close enough
+    // to keep (`leftover_colors::MAX_DISAGREEMENT`)
     let completed_rgb: Vec<f32> =
-        (0..3 * n).map(|i| if transferred[i % n] { 0.5 * leftover_rgb[i] + 0.1 + 0.05 } else { 0.25 }).collect();
+        (0..3 * n).map(|i| if transferred[i % n] { 0.5 * leftover_rgb[i] + 0.1 + 0.05 } else { 0.35 }).collect();
     view.completed = Some(Completed::unguided(hole.clone(), completed_rgb.clone(), vec![5.0; n]));
     view.transferred = Some(transferred.clone());
     let keep_alpha = 0.75;
-    let (taken, refused) = view.take_leftover_colors(keep_alpha);
-    assert_eq!(refused, 0, "the transferred colors agree with the leftovers'");
-    let expected: Vec<bool> = (0..n).map(|p| hole[p] && !transferred[p] && alpha[p] >= keep_alpha).collect();
-    // columns 4..=6 of the hole's 4 lower rows: alpha 1, 0.9, 0.8 (0.7 and under stay invented)
-    assert_eq!(taken, 12);
-    assert_eq!(taken, expected.iter().filter(|&&e| e).count());
+    let counts = view.take_leftover_colors(keep_alpha);
+    let covered_invented = |p: usize| hole[p] && !transferred[p] && alpha[p] >= keep_alpha;
+    assert_eq!(counts.refused, 0, "the transferred colors agree with the leftovers'");
+    assert_eq!(counts.taken + counts.invention_kept, (0..n).filter(|&p| covered_invented(p)).count());
+    // a window with no smear pixel: x or y more than 2 from it
+    let smear_free = |p: usize| x(p) >= 12 || y(p) + 2 < 14;
     let rgb = &view.completed.as_ref().unwrap().rgb;
+    let invented_after = view.invented();
+    let in_photo_colors = |i: usize| 0.5 * leftover_rgb[i] + 0.1;
+    let (mut took, mut kept) = (0, 0);
     for p in 0..n {
-        for c in 0..3 {
-            let want = if expected[p] { 0.5 * leftover_rgb[c * n + p] + 0.1 } else { completed_rgb[c * n + p] };
-            assert!((rgb[c * n + p] - want).abs() < 1e-4, "pixel {p} channel {c}: {} vs {want}", rgb[c * n + p]);
+        let took_leftovers = (0..3).all(|c| (rgb[c * n + p] - in_photo_colors(c * n + p)).abs() < 1e-4);
+        let kept_own = (0..3).all(|c| (rgb[c * n + p] - completed_rgb[c * n + p]).abs() < 1e-4);
+        if covered_invented(p) && smear_free(p) {
+            assert!(
+                took_leftovers && !invented_after[p],
+                "({}, {}): the leftovers look like the invention",
+                x(p),
+                y(p)
+            );
+            took += 1;
+        } else if covered_invented(p) && inner_smear(p) {
+            assert!(kept_own && invented_after[p], "({}, {}): the smear stays out", x(p), y(p));
+            kept += 1;
+        } else if !covered_invented(p) {
+            assert!(kept_own && invented_after[p] == (hole[p] && !transferred[p]), "({}, {}): not covered", x(p), y(p));
         }
     }
-    let invented_after = view.invented();
-    assert!((0..n).all(|p| invented_after[p] == (hole[p] && !transferred[p] && !expected[p])));
+    // 4 rows of 8 columns above the smear's windows and the 12 rows of the 4 columns right of them
+    assert_eq!((took, kept), (8 * 4 + 4 * 12, 25));
+    assert!(counts.taken >= took && counts.invention_kept >= kept);
 }
 
 /// `leftover_colors::disagreeing_transfers` on a 40 x 20 view whose leftovers render flat gray

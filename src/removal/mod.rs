@@ -13,7 +13,8 @@
 //!    views' captured images (complete/transfer.rs), which also corrects covered but poorly
 //!    rendered ones; where the leftovers cover a pixel, their render replaces the transferred
 //!    colors that disagree with it on average (complete/leftover_colors.rs) and fills what no
-//!    photo lent (`EditedView::take_leftover_colors`); only what remains stays invented.
+//!    photo lent where it looks like the invention on average (`EditedView::
+//!    take_leftover_colors`); only what remains stays invented.
 //! 4. Fusion and pruning (fuse.rs, prune.rs): completed depth back-projected into new Gaussians;
 //!    sparse background outliers near them pruned. Then (consensus.rs) which invented pixels each
 //!    view's refinement keeps.
@@ -93,7 +94,8 @@ pub struct RemoveOptions {
     /// keep a pixel: it is filled (photo colors where other views saw it) and gets new Gaussians.
     /// Where they cover a fill pixel with at least this alpha, their depth competes with the
     /// completed one on photo-consistency, and their render is its color where no photo lent one
-    /// or where the transferred colors around it disagree with it on average.
+    /// (if it looks like the invention there on average) or where the transferred colors around
+    /// it disagree with it on average.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
     #[command(flatten)]
@@ -330,8 +332,8 @@ fn correct_depths(
 }
 
 /// Stage 3c over every view (`cameras`, the views' own; needs the photos), then the leftovers'
-/// colors where no photo lent one or the photo's disagrees with them
-/// (`EditedView::take_leftover_colors`).
+/// colors where no photo lent one (and they look like the invention) or the photo's disagrees
+/// with them (`EditedView::take_leftover_colors`).
 fn transfer_colors(
     views: &mut [EditedView],
     cameras: &[Camera],
@@ -350,10 +352,13 @@ fn transfer_colors(
         v.transferred = Some(t);
     }
     // where the Gaussians left behind cover a fill pixel, their render: where no photo lent a
-    // color, and where the transferred colors around it disagree with it
+    // color and it looks like the invention, and where the transferred colors around it
+    // disagree with it
     for v in views.iter_mut() {
-        let (taken, refused) = v.take_leftover_colors(keep_alpha);
-        (v.report.leftover_color_pixels, v.report.refused_transfer_pixels) = (Some(taken), Some(refused));
+        let counts = v.take_leftover_colors(keep_alpha);
+        v.report.leftover_color_pixels = Some(counts.taken);
+        v.report.refused_transfer_pixels = Some(counts.refused);
+        v.report.invention_kept_pixels = Some(counts.invention_kept);
     }
     Ok(())
 }
