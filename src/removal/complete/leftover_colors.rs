@@ -14,10 +14,10 @@
 //! Where no photo lent a color, the leftovers' render stands in for the invention only where it
 //! looks like what the invention continues from around the hole: their window mean within
 //! `MAX_UNLIKE_INVENTION` of the invention's. The leftovers are not always the surface behind the
-//! object: on a statue composite the training had spread large, faint Gaussians over the box's
-//! silhouette that the tagging's vote left to the background, and their render was a brown and
-//! red smear on the lawn that every view's target then kept (held-out masked PSNR 18.86 dB, LPIPS
-//! 0.589; with this check 20.70 / 0.317). On the cup composite they were the desk.
+//! object: on a statue composite the lawn's Gaussians behind the box, which the training views
+//! hardly saw past it, rendered a brown and red smear (the box's edges had pulled their colors)
+//! that every view's target then kept (held-out masked PSNR 18.86 dB, LPIPS 0.589; with this
+//! check 20.70 / 0.317). On the cup composite they were the desk, seen around the box.
 //!
 //! Means over a window, not single pixels: a texture the leftovers blurred (the synth rooms'
 //! checkerboards, the desk's grain) departs from them pixel by pixel but not on average.
