@@ -103,12 +103,14 @@ fn untransferred_fill_under_the_leftovers_takes_their_render_where_it_looks_like
         })
         .collect();
     let rendered = |rgb: Vec<f32>, alpha: Vec<f32>| Rendered { rgb, alpha, depth: vec![5.0; n], weight: vec![0.0; n] };
+    let keep_alpha = 0.75;
     let masked = MaskedView {
         before: rendered(before, vec![1.0; n]),
         after_removal: rendered(leftover_rgb.clone(), alpha.clone()),
         hole: hole.clone(),
         fill: hole.clone(),
         footprint: hole.clone(),
+        keep_alpha,
     };
     let mut view = EditedView::new(&camera, Some(&photo), masked);
     // the transferred colors are 0.05 off the leftovers' (in the photo's colors): close enough
@@ -117,8 +119,7 @@ fn untransferred_fill_under_the_leftovers_takes_their_render_where_it_looks_like
         (0..3 * n).map(|i| if transferred[i % n] { 0.5 * leftover_rgb[i] + 0.1 + 0.05 } else { 0.35 }).collect();
     view.completed = Some(Completed::unguided(hole.clone(), completed_rgb.clone(), vec![5.0; n]));
     view.transferred = Some(transferred.clone());
-    let keep_alpha = 0.75;
-    let counts = view.take_leftover_colors(keep_alpha);
+    let counts = view.take_leftover_colors();
     let covered_invented = |p: usize| hole[p] && !transferred[p] && alpha[p] >= keep_alpha;
     assert_eq!(counts.refused, 0, "the transferred colors agree with the leftovers'");
     assert_eq!(counts.taken + counts.invention_kept, (0..n).filter(|&p| covered_invented(p)).count());

@@ -587,7 +587,7 @@ fn hole_fill_keeps_only_kept_objects_not_the_background_left_behind() {
     // patch Gaussians: where the completed depth is just behind the wall, at every fill pixel
     // (but the kept object's blurred edge, whose render is in front of it); none where it is 40 %
     // behind the wall
-    let near = m.patch_pixels(&vec![5.0 * (1.0 + LEFTOVER_IN_FRONT / 2.0); w * h], 0.9);
+    let near = m.patch_pixels(&vec![5.0 * (1.0 + LEFTOVER_IN_FRONT / 2.0); w * h]);
     assert!((0..w * h).filter(|&p| m.fill[p] && !rect(p, 2)).all(|p| near[p]));
-    assert!(m.patch_pixels(&vec![7.0; w * h], 0.9).iter().all(|&p| !p));
+    assert!(m.patch_pixels(&vec![7.0; w * h]).iter().all(|&p| !p));
 }

@@ -200,11 +200,11 @@ pub fn remove(
         // saw the completed surface
         if !photos.is_empty() {
             if completer.photo_depth {
-                correct_depths(&mut views, cameras, completer, opts.keep_alpha, progress);
+                correct_depths(&mut views, cameras, completer, progress);
                 clock.lap("photo_depth");
             }
             if opts.stages.transfer {
-                transfer_colors(&mut views, cameras, completer, opts.keep_alpha, progress)?;
+                transfer_colors(&mut views, cameras, completer, progress)?;
                 clock.lap("transfer");
             }
         }
@@ -303,21 +303,8 @@ fn sources_and_holes<'v>(views: &'v [EditedView]) -> (Vec<SourceView<'v>>, Vec<&
 }
 
 /// Stage 3b over every view (`cameras`, the views' own; needs the photos).
-fn correct_depths(
-    views: &mut [EditedView],
-    cameras: &[Camera],
-    completer: &Completer,
-    keep_alpha: f32,
-    progress: Progress,
-) {
-    // the depth of the Gaussians left behind the objects, where they cover the pixel
-    let leftovers: Vec<Vec<f32>> = views
-        .iter()
-        .map(|v| {
-            let a = &v.masked.after_removal;
-            a.depth.iter().zip(&a.alpha).map(|(&d, &alpha)| if alpha >= keep_alpha { d } else { 0.0 }).collect()
-        })
-        .collect();
+fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Completer, progress: Progress) {
+    let leftovers: Vec<Vec<f32>> = views.iter().map(|v| v.masked.leftover_depth()).collect();
     let mut completed = take_completions(views);
     let (sources, holes) = sources_and_holes(views);
     let found = completer.correct_depths(cameras, &sources, &holes, &leftovers, &mut completed, &mut |d, t| {
@@ -338,7 +325,6 @@ fn transfer_colors(
     views: &mut [EditedView],
     cameras: &[Camera],
     completer: &Completer,
-    keep_alpha: f32,
     progress: Progress,
 ) -> Result<()> {
     let mut completed = take_completions(views);
@@ -355,7 +341,7 @@ fn transfer_colors(
     // color and it looks like the invention, and where the transferred colors around it
     // disagree with it
     for v in views.iter_mut() {
-        let counts = v.take_leftover_colors(keep_alpha);
+        let counts = v.take_leftover_colors();
         v.report.leftover_color_pixels = Some(counts.taken);
         v.report.refused_transfer_pixels = Some(counts.refused);
         v.report.invention_kept_pixels = Some(counts.invention_kept);
@@ -372,8 +358,7 @@ fn fuse_patch(
     background: GaussianScene,
     opts: &RemoveOptions,
 ) -> Result<Patched> {
-    let patch_pixels: Vec<Vec<bool>> =
-        views.iter().map(|v| v.masked.patch_pixels(&v.completion().depth, opts.keep_alpha)).collect();
+    let patch_pixels: Vec<Vec<bool>> = views.iter().map(|v| v.masked.patch_pixels(&v.completion().depth)).collect();
     for (v, p) in views.iter_mut().zip(&patch_pixels) {
         let count = |x: &[bool]| x.iter().filter(|&&f| f).count();
         v.report.fill_pixels_without_patch = count(&v.masked.fill) - count(p);

@@ -132,11 +132,26 @@ impl MaskedView {
     /// those that Gaussians left behind a removed object cover (alpha at least `keep_alpha`) more
     /// than `LEFTOVER_IN_FRONT` in front of that depth. Their colors still come from the
     /// completion; the refinement recolors what covers them.
-    pub fn patch_pixels(&self, depth: &[f32], keep_alpha: f32) -> Vec<bool> {
+    pub fn patch_pixels(&self, depth: &[f32]) -> Vec<bool> {
         let a = &self.after_removal;
         (0..self.fill.len())
-            .map(|p| self.fill[p] && !(a.alpha[p] >= keep_alpha && a.depth[p] < depth[p] * (1.0 - LEFTOVER_IN_FRONT)))
+            .map(|p| self.fill[p] && !(self.leftovers_cover(p) && a.depth[p] < depth[p] * (1.0 - LEFTOVER_IN_FRONT)))
             .collect()
+    }
+
+    /// Do the Gaussians left after removal cover pixel `p` (alpha at least `keep_alpha`)? In the
+    /// fill these are the Gaussians left behind the objects, whose depth (`leftover_depth`),
+    /// colors (`EditedView::take_leftover_colors`) and place in the patch (`patch_pixels`) every
+    /// later stage weighs by this one rule.
+    pub fn leftovers_cover(&self, p: usize) -> bool {
+        self.after_removal.alpha[p] >= self.keep_alpha
+    }
+
+    /// The depth the render after removal shows where the leftovers cover the pixel
+    /// (`leftovers_cover`), 0 elsewhere: what `leftover_depth` weighs against the completion.
+    pub fn leftover_depth(&self) -> Vec<f32> {
+        let a = &self.after_removal;
+        (0..a.depth.len()).map(|p| if self.leftovers_cover(p) { a.depth[p] } else { 0.0 }).collect()
     }
 }
 
@@ -171,6 +186,9 @@ pub struct MaskedView {
     /// The objects' own footprint with a 1-pixel margin for their anti-aliased edges: where color
     /// transfer must not read this view (the dilated hole would hide background other views saw).
     pub footprint: Vec<bool>,
+    /// Hole pixels the render after removal covers with at least this alpha keep it: a kept
+    /// object's (stage 2), or the Gaussians left behind the removed ones (`leftovers_cover`).
+    pub keep_alpha: f32,
 }
 
 /// Stage 2: renders every view before and after deletion and draws its hole.
@@ -207,7 +225,7 @@ pub fn hole_masks(
             (0..w * h).map(|p| hole[p] && !after_removal.kept_object_covers(p, cfg.keep_alpha)).collect();
         let footprint = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, 1.0);
         before.weight = Vec::new();
-        views.push(MaskedView { before, after_removal, hole, fill, footprint });
+        views.push(MaskedView { before, after_removal, hole, fill, footprint, keep_alpha: cfg.keep_alpha });
         progress(i + 1, cameras.len());
     }
     Ok(views)

@@ -135,7 +135,7 @@ impl<'a> EditedView<'a> {
     }
 
     /// After the color transfer: the fill pixels no photo lent a color, where the Gaussians left
-    /// behind the objects cover them (alpha at least `keep_alpha`) and their render looks like the
+    /// behind the objects cover them (`MaskedView::leftovers_cover`) and their render looks like the
     /// invention on average (`leftover_colors::unlike_invention`), take that render (in the
     /// photo's colors, as the transferred ones are) instead of the inpainter's invention, and
     /// count as not invented. The leftovers were trained by every view that saw around the
@@ -146,13 +146,13 @@ impl<'a> EditedView<'a> {
     /// disagree with the leftovers' render on average (`leftover_colors`). Returns the pixels
     /// taken where no photo lent a color, those whose transferred color was refused, and those
     /// that kept the invention because the leftovers' render departs from it.
-    pub fn take_leftover_colors(&mut self, keep_alpha: f32) -> LeftoverColors {
+    pub fn take_leftover_colors(&mut self) -> LeftoverColors {
         let (Some(completed), Some(transferred)) = (self.completed.as_mut(), self.transferred.as_mut()) else {
             return LeftoverColors::default();
         };
         let leftovers = &self.masked.after_removal;
         let n = leftovers.alpha.len();
-        let covered = |p: usize| self.masked.fill[p] && leftovers.alpha[p] >= keep_alpha;
+        let covered = |p: usize| self.masked.fill[p] && self.masked.leftovers_cover(p);
         let mut in_photo_colors = vec![0f32; 3 * n];
         for p in (0..n).filter(|&p| covered(p)) {
             let rgb = self.photo_colors.apply_pixel([0, 1, 2].map(|c| leftovers.rgb[c * n + p] as f64));

@@ -51,9 +51,10 @@ fn photo_variance(
     spread.variance()
 }
 
-/// Replaces the depth of view `target`'s `completed` fill pixels by the `leftover` depth (the
-/// render after removal; 0 where its alpha is under the removal's `keep_alpha`) where the other
-/// views' photos agree on it better (module comment). `photos` as `interleave_rgb` stores them.
+/// Replaces the depth of view `target`'s `completed` fill pixels by the `leftover` depth
+/// (`MaskedView::leftover_depth`: the render after removal where the leftovers cover the pixel,
+/// 0 elsewhere) where the other views' photos agree on it better (module comment). `photos` as
+/// `interleave_rgb` stores them.
 /// Returns the pixels that took the leftover depth.
 pub fn prefer_leftover_depth(
     target: usize,
