@@ -148,7 +148,8 @@ impl MaskedView {
     }
 
     /// The depth the render after removal shows where the leftovers cover the pixel
-    /// (`leftovers_cover`), 0 elsewhere: what `leftover_depth` weighs against the completion.
+    /// (`leftovers_cover`), 0 elsewhere: what `complete::leftover_depth` weighs against the
+    /// completed depth.
     pub fn leftover_depth(&self) -> Vec<f32> {
         let a = &self.after_removal;
         (0..a.depth.len()).map(|p| if self.leftovers_cover(p) { a.depth[p] } else { 0.0 }).collect()
@@ -186,8 +187,9 @@ pub struct MaskedView {
     /// The objects' own footprint with a 1-pixel margin for their anti-aliased edges: where color
     /// transfer must not read this view (the dilated hole would hide background other views saw).
     pub footprint: Vec<bool>,
-    /// Hole pixels the render after removal covers with at least this alpha keep it: a kept
-    /// object's (stage 2), or the Gaussians left behind the removed ones (`leftovers_cover`).
+    /// The alpha at which the render after removal covers a pixel: a hole pixel a kept object
+    /// covers keeps its render (stage 2); a fill pixel the Gaussians left behind the removed ones
+    /// cover lets them compete with the completion (`leftovers_cover`).
     pub keep_alpha: f32,
 }
 
