@@ -307,7 +307,8 @@ impl Completer {
     }
 
     /// Stage 3b, photo-consistent hole depth: per view, first the fill pixels where the
-    /// `leftovers` (the depth the render after removal shows where it is opaque, 0 elsewhere) make
+    /// `leftovers` (`MaskedView::leftover_depth`: the render after removal's depth where the
+    /// Gaussians left behind the objects cover the pixel, 0 elsewhere) make
     /// the other views' photos agree better take that depth (`leftover_depth`), then the depth of
     /// the whole `hole` is corrected so that the other views' photos (`sources`, one per view)
     /// agree on its colors (`photo_depth`). It runs before the color transfer and the fusion, and
