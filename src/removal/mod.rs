@@ -372,7 +372,9 @@ fn fuse_patch(
         })
         .collect();
     let removed_means: Vec<[f32; 3]> = scene.means.iter().zip(removed).filter(|(_, &r)| r).map(|(m, _)| *m).collect();
-    fuse::patch_scene(background, opts.fill, &fviews, &removed_means, &opts.fuse, opts.stages.prune, &opts.prune)
+    let unrefined = FuseConfig { opacity: fuse::UNREFINED_OPACITY, ..opts.fuse.clone() };
+    let cfg = if opts.stages.refine { &opts.fuse } else { &unrefined };
+    fuse::patch_scene(background, opts.fill, &fviews, &removed_means, cfg, opts.stages.prune, &opts.prune)
 }
 
 /// Stage 4b: each view's refinement weights from how its inventions agree with the others'
