@@ -131,7 +131,7 @@ pub struct FuseConfig {
     #[arg(skip = 0.05)]
     pub free_space_tolerance: f32,
     /// Initial opacity of the new Gaussians when the refinement follows (without it they start at
-    /// `UNREFINED_OPACITY`). They start mostly transparent: where the Gaussians the capture left
+    /// `UNREFINED_OPACITY`, `RemoveOptions::fuse_config`). They start mostly transparent: where the Gaussians the capture left
     /// behind an object lie on the completed surface (trained by every view that saw it there,
     /// so consistent across views), the refinement raises a patch Gaussian's opacity only as far
     /// as the views' targets ask, and the leftovers keep showing through elsewhere. At 0.9 the

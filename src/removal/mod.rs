@@ -125,6 +125,13 @@ impl RemoveOptions {
     pub fn refine_config(&self) -> RefineConfig {
         RefineConfig { background: self.background, seed: self.seed, ..self.refine.clone() }
     }
+
+    /// The fusion's settings; without refinement the patch must cover the hole on its own and
+    /// starts at `fuse::UNREFINED_OPACITY`.
+    pub fn fuse_config(&self) -> FuseConfig {
+        let opacity = if self.stages.refine { self.fuse.opacity } else { fuse::UNREFINED_OPACITY };
+        FuseConfig { opacity, ..self.fuse.clone() }
+    }
 }
 
 /// Per-view images of a removal.
@@ -232,7 +239,8 @@ pub fn remove(
     clock.lap("render");
     let report = RemovalReport {
         labels: opts.labels.clone(),
-        options: opts.clone(),
+        // the fusion's settings as used (its opacity depends on the refinement)
+        options: RemoveOptions { fuse: opts.fuse_config(), ..opts.clone() },
         completion: opts.stages.complete.then(|| CompletionSummary::of(completer, !photos.is_empty())),
         gaussians: GaussianCounts { input: scene.len(), removed: removed_count, pruned, output: result.len() },
         views: if opts.stages.complete { views.iter().map(|v| v.report.clone()).collect() } else { Vec::new() },
@@ -372,9 +380,15 @@ fn fuse_patch(
         })
         .collect();
     let removed_means: Vec<[f32; 3]> = scene.means.iter().zip(removed).filter(|(_, &r)| r).map(|(m, _)| *m).collect();
-    let unrefined = FuseConfig { opacity: fuse::UNREFINED_OPACITY, ..opts.fuse.clone() };
-    let cfg = if opts.stages.refine { &opts.fuse } else { &unrefined };
-    fuse::patch_scene(background, opts.fill, &fviews, &removed_means, cfg, opts.stages.prune, &opts.prune)
+    fuse::patch_scene(
+        background,
+        opts.fill,
+        &fviews,
+        &removed_means,
+        &opts.fuse_config(),
+        opts.stages.prune,
+        &opts.prune,
+    )
 }
 
 /// Stage 4b: each view's refinement weights from how its inventions agree with the others'
