@@ -19,7 +19,9 @@
 //! removal only, cogeo, ground truth on one held-out view), and replace the table between the
 //! `removal-table` markers of bench/RESULTS.md (unless --no-results); real scenes write
 //! removal-real-<device>.json, removal-real-contact-sheet.png and the `removal-real-table`
-//! markers; a rerun of some real scenes keeps the others' rows, and `--real-table-only` rebuilds
+//! markers; a rerun of some real scenes or variants keeps the others' rows (the real scenes
+//! also have `CAPTURE_CEILING`, the capture trained without the objects, which removes
+//! nothing: the ceiling of every variant), and `--real-table-only` rebuilds
 //! the table and sheet from the stored rows without running anything. `--reuse-composites` keeps
 //! each real scene's trained and tagged composite and reuses it on later runs (removal_real.rs),
 //! so that runs of two commits compare on the same training. `--real-exposure cup` trains that
@@ -78,8 +80,15 @@ const ONE_SOURCE: &str = "one inpainting source (the fill of seed 1 as --inpaint
 const DISAGREEING: &str = "disagreeing inpaintings (seeds 1-3 view by view as --inpainted)";
 const DISAGREEING_SEEDS: [u64; 3] = [1, 2, 3];
 
+/// The diagnostic row of the real scenes without any removal: the capture trained on its own
+/// photos, without the objects (the cached training the objects were composited by), rendered at
+/// the held-out views. No removal can do better than a training that saw the background, so this
+/// is the ceiling of every variant, and its masked PSNR against the perfect inpaintings' says how
+/// much the composite's own training, not the fill, costs. The synth rooms have no such training.
+const CAPTURE_CEILING: &str = "capture without the objects (its own training, no removal)";
+
 /// (name, tagging method, extra `cogeo remove` flags)
-const VARIANTS: [(&str, &str, &[&str]); 12] = [
+const VARIANTS: [(&str, &str, &[&str]); 13] = [
     ("cogeo (full)", "vote", &[]),
     ("removal only", "vote", &["--removal-only"]),
     ("harmonic fill (no texture synthesis)", "vote", &["--inpainter", "harmonic"]),
@@ -92,6 +101,7 @@ const VARIANTS: [(&str, &str, &[&str]); 12] = [
     ("shared inventions (one per surface point)", "vote", &["--share-inventions"]),
     (ONE_SOURCE, "vote", &[]),
     (DISAGREEING, "vote", &[]),
+    (CAPTURE_CEILING, "vote", &[]),
 ];
 
 /// The variants run again on every extra training of `--retrain`: the full pipeline and the
@@ -123,6 +133,9 @@ struct Training<'a> {
     /// Where trained and tagged scenes are kept between runs (`--reuse-composites`), one folder
     /// per training seed; None trains and tags afresh.
     reuse: Option<PathBuf>,
+    /// A real scene's capture trained without the objects (`CAPTURE_CEILING`); None for the synth
+    /// rooms, which skip that variant.
+    original: Option<&'a Path>,
 }
 
 impl Training<'_> {
@@ -158,6 +171,51 @@ impl Training<'_> {
             std::fs::copy(runs[i % runs.len()].join(name), mixed.join(name)).expect("cannot copy an inpainted view");
         }
         mixed
+    }
+
+    /// `cogeo eval` of the held-out renders in `out/test_after` (made from `scene`) into
+    /// `out/metrics.json`.
+    fn score(&self, out: &Path, scene: &Path) {
+        let p = |x: &Path| x.to_string_lossy().into_owned();
+        let mut e = pipeline::eval(out, self.truth, &self.data.join("object_mask"), &out.join("metrics.json"));
+        e.extend(s(&["--labels", self.labels, "--data", &p(self.data), "--scene", &p(scene)]));
+        if let Some(m) = self.lpips {
+            e.extend(s(&["--lpips-model", m]));
+        }
+        if let Some(m) = self.fid {
+            e.extend(s(&["--fid-model", m]));
+        }
+        if self.fit_exposure {
+            e.push("--fit-exposure".into());
+        }
+        cogeo(&e);
+    }
+
+    /// `CAPTURE_CEILING`'s row: the `original` training rendered at the composite's cameras, its
+    /// held-out views (the dataset's test split) scored like a removal's. No removal ran: no
+    /// time, no Gaussian counts; the device is the original training's.
+    fn ceiling_row(&self, original: &Path, out: &Path, seed: u64, train_metrics: &Value) -> Value {
+        let p = |x: &Path| x.to_string_lossy().into_owned();
+        let all = out.join("all_views");
+        cogeo(&s(&["render", "--scene", &p(original), "--colmap", &p(self.data), "--out", &p(&all)]));
+        let held_out = out.join("test_after");
+        std::fs::create_dir_all(&held_out).expect("cannot create the ceiling's test_after");
+        let dataset = cogeo::scene::dataset::load(self.data, "images", 1).expect("the composite loads as a capture");
+        for view in &dataset.test {
+            let stem = view.path.file_stem().expect("a photo's name").to_string_lossy().into_owned();
+            let name = format!("{stem}.png");
+            std::fs::copy(all.join(&name), held_out.join(&name)).expect("cannot copy a held-out render");
+        }
+        self.score(out, original);
+        // `cogeo render` names no device: the one the original training (beside it) ran on
+        let device = read_json(&original.with_file_name("metrics.json"))["device"].clone();
+        json!({
+            "scene": self.name, "removed_labels": self.labels, "variant": CAPTURE_CEILING, "training_seed": seed,
+            "exposure": self.exposure, "train_test_psnr_exposure_fitted": train_metrics["test"]["psnr_exposure_fitted"],
+            "device": device, "train_test_psnr": train_metrics["test"]["psnr"],
+            "metrics": read_json(&out.join("metrics.json")), "stage_seconds": Value::Null, "total_seconds": Value::Null,
+            "peak_rss_mib": Value::Null, "gaussians": Value::Null, "background_psnr_vs_original": Value::Null,
+        })
     }
 
     /// Trains the scene with `seed` into `dir`, tags it, runs each variant and scores it: one row per
@@ -214,6 +272,11 @@ impl Training<'_> {
         let mut rows = Vec::new();
         for (k, (variant, method, extra)) in variants.iter().enumerate() {
             let out = dir.join(format!("variant_{k}"));
+            if *variant == CAPTURE_CEILING {
+                let Some(original) = self.original else { continue };
+                rows.push(self.ceiling_row(original, &out, seed, &train_metrics));
+                continue;
+            }
             let tagged = dir.join(format!("tagged_{method}.ply"));
             let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(self.labels), &out);
             a.extend(s(extra));
@@ -233,18 +296,7 @@ impl Training<'_> {
             }
             cogeo(&a);
             let metrics_path = out.join("metrics.json");
-            let mut e = pipeline::eval(&out, self.truth, &data.join("object_mask"), &metrics_path);
-            e.extend(s(&["--labels", self.labels, "--data", &p(data), "--scene", &p(&out.join("scene.ply"))]));
-            if let Some(m) = self.lpips {
-                e.extend(s(&["--lpips-model", m]));
-            }
-            if let Some(m) = self.fid {
-                e.extend(s(&["--fid-model", m]));
-            }
-            if self.fit_exposure {
-                e.push("--fit-exposure".into());
-            }
-            cogeo(&e);
+            self.score(&out, &out.join("scene.ply"));
             let report = read_json(&out.join("report.json"));
             let m = read_json(&metrics_path);
             rows.push(json!({
@@ -351,6 +403,7 @@ fn main() {
             exposure: false,
             fit_exposure: jittered,
             reuse: None,
+            original: None,
         };
         for r in run.variants(&dir, spec.seed, &variants) {
             device = r["device"].as_str().unwrap_or("?").to_string();
