@@ -176,6 +176,45 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
         "{unseen} never-seen pixels for {object_pixels:?} object pixels"
     );
 
+    // the composite's sparse model: the capture's own points, less those the objects stand on
+    // or hide (within a tenth of their size of their surface), and points on the objects' surfaces
+    let read_points = |path: &Path| -> Vec<[f64; 3]> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+            .map(|l| {
+                let v: Vec<f64> = l.split_whitespace().skip(1).take(3).map(|t| t.parse().unwrap()).collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect()
+    };
+    let captured = read_points(&root.join("capture/sparse/0/points3D.txt"));
+    let model = read_points(&out.join("sparse/0/points3D.txt"));
+    let surface_distance = |p: [f64; 3]| {
+        let local = g.to_local(p);
+        summary.objects.iter().map(|o| o.sdf(local) / o.size).fold(f64::INFINITY, f64::min)
+    };
+    let is_captured = |p: &[f64; 3]| captured.iter().any(|c| (0..3).all(|k| (c[k] - p[k]).abs() < 1e-9));
+    let (mut kept, mut swallowed) = (0, 0);
+    for c in &captured {
+        let in_model = model.iter().any(|p| (0..3).all(|k| (c[k] - p[k]).abs() < 1e-9));
+        if surface_distance(*c) < 0.1 {
+            assert!(!in_model, "capture point {c:?} under an object is in the composite's model");
+            swallowed += 1;
+        } else {
+            assert!(in_model, "capture point {c:?} away from the objects is missing from the composite's model");
+            kept += 1;
+        }
+    }
+    assert!(swallowed > 0 && kept > 2000, "{swallowed} capture points swallowed, {kept} kept");
+    let on_objects: Vec<f64> = model.iter().filter(|p| !is_captured(p)).map(|&p| surface_distance(p)).collect();
+    assert!(on_objects.len() > 20, "only {} points on the objects", on_objects.len());
+    for d in &on_objects {
+        // a composited depth sample of an object pixel (supersampled edges blend in some floor)
+        assert!(d.abs() < 0.05, "a model point off the capture lies {d} sizes from every object's surface");
+    }
+
     // the same placement again from the first composite's synth.json, with another seed (which
     // would place the objects elsewhere): the same objects, masks and depths
     let again = root.join("again");

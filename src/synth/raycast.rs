@@ -73,7 +73,7 @@ const LIGHT: V3 = [0.48, -0.36, 0.8];
 
 impl Object {
     /// Signed distance from p to the object's surface.
-    fn sdf(&self, p: V3) -> f64 {
+    pub fn sdf(&self, p: V3) -> f64 {
         let q = sub(p, self.center);
         let s = self.size;
         match self.shape {
