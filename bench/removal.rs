@@ -242,7 +242,12 @@ impl Training<'_> {
             }
         } else {
             let mut train_args = pipeline::train(&capture, &layout.train());
-            train_args.extend(pipeline::synth_training(self.iters.parse().expect("--iters is a number"), seed));
+            // a composite trains as its capture did (removal_real::prepare), a synth room as the
+            // synth rooms do
+            train_args.extend(match self.original {
+                Some(_) => pipeline::capture_training(self.iters, Some(seed)),
+                None => pipeline::synth_training(self.iters.parse().expect("--iters is a number"), seed),
+            });
             if self.exposure {
                 train_args.push("--exposure".into());
             }

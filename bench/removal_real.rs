@@ -94,7 +94,7 @@ pub fn prepare(spec: &RealSpec, factor: &str, iters: &str, data: &Path) -> PathB
     if !scene.is_file() {
         eprintln!("training {} without objects into {} (cached for later runs)", spec.capture, cache.display());
         crate::common::make_folder(&cache, |tmp| {
-            cogeo(&s(&[
+            let mut train = s(&[
                 "train",
                 "--data",
                 &p(&capture),
@@ -104,13 +104,9 @@ pub fn prepare(spec: &RealSpec, factor: &str, iters: &str, data: &Path) -> PathB
                 &downscale.to_string(),
                 "--out",
                 &p(tmp),
-                "--iters",
-                iters,
-                "--max-gaussians",
-                "200000",
-                "--checkpoint-every",
-                "0",
-            ]));
+            ]);
+            train.extend(cogeo::pipeline::capture_training(iters, None));
+            cogeo(&train);
         });
     }
     let placement = placement_file(spec);
@@ -236,7 +232,9 @@ pub fn run(
         // new cache folder starts without them
         let exposure = with_exposure(spec.capture);
         let kept_as = if exposure { format!("{}-exposure", spec.name) } else { spec.name.to_string() };
-        let reuse = reuse_composites.then(|| capture_cache.join("composites").join(kept_as));
+        // (`composites-sfm`: those trained from the capture's own sparse points with its recipe;
+        // the `composites` of before 2026-11-29 started from depth samples, the synth rooms' way)
+        let reuse = reuse_composites.then(|| capture_cache.join("composites-sfm").join(kept_as));
         let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
         let truth = cogeo::synth::ground_truth(&data, &labels);
         assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);

@@ -81,8 +81,10 @@ pub struct SynthArgs {
     /// either). Default 0: none.
     #[arg(long, default_value_t = 0.0, requires = "composite_into")]
     pub contact_shadow: f64,
-    /// With --composite-into: sparse points in the COLMAP model, sampled from the training
-    /// views' composited surfaces.
+    /// With --composite-into: the COLMAP model's sparse points are the capture's own (less those
+    /// the objects stand on or hide) plus points on the objects, as many as sampling this many
+    /// points on the training views' composited surfaces puts there; a capture with under 1000
+    /// points gets this many composited-surface points instead.
     #[arg(long, default_value_t = 40_000, requires = "composite_into")]
     pub sparse_points: usize,
     /// With --composite-into: stand the objects where an earlier composite's synth.json says
