@@ -412,10 +412,10 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
 /// The contact sheet's columns (input, removal only, cogeo, perfect inpainting, ground truth) and
 /// their largest width in pixels.
 const SHEET_COLUMNS: u32 = 5;
+const SHEET_COLUMN: u32 = 256;
 /// The variants of the sheet's middle columns (between the input and the ground truth).
 const SHEET_VARIANTS: [&str; 3] = ["removal only", "cogeo (full)", crate::PERFECT_INPAINTING];
 const SHEET_FILE: &str = "removal-real-contact-sheet.png";
-const SHEET_COLUMN: u32 = 256;
 
 /// Each scene's strip (bench/results/removal-real-<scene>.png): its first held-out view in each
 /// of `columns` (folders of images named like the views), side by side; then the sheet of every
