@@ -131,16 +131,16 @@ pub struct FuseConfig {
     #[arg(skip = 0.05)]
     pub free_space_tolerance: f32,
     /// Initial opacity of the new Gaussians when the refinement follows (without it they start at
-    /// `UNREFINED_OPACITY`, `RemoveOptions::fuse_config`). They start mostly transparent: where the Gaussians the capture left
-    /// behind an object lie on the completed surface (trained by every view that saw it there,
-    /// so consistent across views), the refinement raises a patch Gaussian's opacity only as far
-    /// as the views' targets ask, and the leftovers keep showing through elsewhere. At 0.9 the
-    /// one-owner fills covered them from the start, and a held-out view showed the owners' grain
-    /// a pixel or two off and in their own exposures. Held-out masked PSNR / LPIPS (cached
-    /// trainings, by hand) at 0.9, 0.5, 0.3 and 0.15: cup-one 26.50 / 0.179, 26.66 / 0.181,
-    /// 26.83 / 0.184, 26.88 / 0.187; cup-two-of-three 27.11 / 0.151 and at 0.3 27.42 / 0.153;
-    /// statue-one 20.70 / 0.317, 20.70 / 0.316, 20.72 / 0.318; synth rooms one / two-of-three /
-    /// three-of-four 25.94 / 26.19 / 26.18 and at 0.3 25.93 / 26.15 / 26.29.
+    /// `UNREFINED_OPACITY`, `RemoveOptions::fuse_config`). They start mostly transparent: where the
+    /// Gaussians the capture left behind an object lie on the completed surface (trained by every
+    /// view that saw it there, so consistent across views), the refinement raises a patch
+    /// Gaussian's opacity only as far as the views' targets ask, and the leftovers keep showing
+    /// through elsewhere. At 0.9 the one-owner fills covered them from the start, and a held-out
+    /// view showed the owners' grain a pixel or two off and in their own exposures. Held-out masked
+    /// PSNR / LPIPS (cached trainings, by hand) at 0.9, 0.5, 0.3 and 0.15: cup-one 26.50 / 0.179,
+    /// 26.66 / 0.181, 26.83 / 0.184, 26.88 / 0.187; cup-two-of-three 27.11 / 0.151 and at 0.3
+    /// 27.42 / 0.153; statue-one 20.70 / 0.317, 20.70 / 0.316, 20.72 / 0.318; synth rooms one /
+    /// two-of-three / three-of-four 25.94 / 26.19 / 26.18 and at 0.3 25.93 / 26.15 / 26.29.
     #[arg(skip = 0.3)]
     pub opacity: f32,
     /// Each surface point of the fill is made from one view only: the views are taken in order of
