@@ -178,19 +178,11 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
 
     // the composite's sparse model: the capture's own points, less those the objects stand on
     // or hide (within a tenth of their size of their surface), and points on the objects' surfaces
-    let read_points = |path: &Path| -> Vec<[f64; 3]> {
-        std::fs::read_to_string(path)
-            .unwrap()
-            .lines()
-            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-            .map(|l| {
-                let v: Vec<f64> = l.split_whitespace().skip(1).take(3).map(|t| t.parse().unwrap()).collect();
-                [v[0], v[1], v[2]]
-            })
-            .collect()
+    let read_points = |dir: &Path| -> Vec<[f64; 3]> {
+        cogeo::scene::dataset::read_capture(dir).unwrap().points.iter().map(|p| p.xyz).collect()
     };
-    let captured = read_points(&root.join("capture/sparse/0/points3D.txt"));
-    let model = read_points(&out.join("sparse/0/points3D.txt"));
+    let captured = read_points(&root.join("capture"));
+    let model = read_points(&out);
     let surface_distance = |p: [f64; 3]| {
         let local = g.to_local(p);
         summary.objects.iter().map(|o| o.sdf(local) / o.size).fold(f64::INFINITY, f64::min)
