@@ -193,41 +193,37 @@ impl Training<'_> {
 
     /// `CAPTURE_CEILING`'s row: the `original` training rendered at the composite's cameras, its
     /// held-out views (the dataset's test split) scored like a removal's. No removal ran: no
-    /// time, no Gaussian counts; the device is the original training's.
-    fn ceiling_row(&self, original: &Path, out: &Path, seed: u64, train_metrics: &Value) -> Value {
+    /// time, no Gaussian counts; the training fields and the device are the original's.
+    fn ceiling_row(&self, original: &Path, out: &Path) -> Value {
         let p = |x: &Path| x.to_string_lossy().into_owned();
         let all = out.join("all_views");
         cogeo(&s(&["render", "--scene", &p(original), "--colmap", &p(self.data), "--out", &p(&all)]));
         let held_out = out.join("test_after");
         std::fs::create_dir_all(&held_out).expect("cannot create the ceiling's test_after");
-        let dataset = cogeo::scene::dataset::load(self.data, "images", 1).expect("the composite loads as a capture");
-        for view in &dataset.test {
-            let stem = view.path.file_stem().expect("a photo's name").to_string_lossy().into_owned();
-            let name = format!("{stem}.png");
+        // the held-out views are the dataset's split of the model's cameras (no photo need load)
+        let model = cogeo::scene::dataset::read_capture(self.data).expect("the composite's model reads");
+        for (_, cam) in model.cameras.iter().enumerate().filter(|(i, _)| cogeo::scene::dataset::is_test_view(*i)) {
+            let name = format!("{}.png", cam.name);
             std::fs::copy(all.join(&name), held_out.join(&name)).expect("cannot copy a held-out render");
         }
         self.score(out, original);
-        // `cogeo render` names no device: the one the original training (beside it) ran on
-        let device = read_json(&original.with_file_name("metrics.json"))["device"].clone();
+        // the training is the original's (its own seed); `cogeo render` names no device: the one
+        // that training ran on
+        let trained = read_json(&original.with_file_name("metrics.json"));
         json!({
-            "scene": self.name, "removed_labels": self.labels, "variant": CAPTURE_CEILING, "training_seed": seed,
-            "exposure": self.exposure, "train_test_psnr_exposure_fitted": train_metrics["test"]["psnr_exposure_fitted"],
-            "device": device, "train_test_psnr": train_metrics["test"]["psnr"],
+            "scene": self.name, "removed_labels": self.labels, "variant": CAPTURE_CEILING, "training_seed": Value::Null,
+            "exposure": self.exposure, "train_test_psnr_exposure_fitted": trained["test"]["psnr_exposure_fitted"],
+            "device": trained["device"], "train_test_psnr": trained["test"]["psnr"],
             "metrics": read_json(&out.join("metrics.json")), "stage_seconds": Value::Null, "total_seconds": Value::Null,
             "peak_rss_mib": Value::Null, "gaussians": Value::Null, "background_psnr_vs_original": Value::Null,
         })
     }
 
-    /// Trains the scene with `seed` into `dir`, tags it, runs each variant and scores it: one row per
-    /// variant, with the device and the training's seed and test PSNR.
-    fn variants(&self, dir: &Path, seed: u64, variants: &[(&str, &str, &[&str])]) -> Vec<Value> {
-        let p = |x: &Path| x.to_string_lossy().into_owned();
-        let data = self.data;
+    /// Trains the composite with `seed` into `dir` and tags it by each of `methods`, or copies a
+    /// kept training and taggings (`reuse`) that hold them all.
+    fn train_and_tag(&self, dir: &Path, seed: u64, methods: &[&str]) {
         let layout = Layout { out: dir };
-        let capture = Capture::at(data);
-        let mut methods: Vec<&str> = variants.iter().map(|v| v.1).collect();
-        methods.sort();
-        methods.dedup();
+        let capture = Capture::at(self.data);
         let tagged_name = |method: &str| format!("tagged_{method}.ply");
         // a kept training is reused only when it holds every tagging the variants ask for
         let kept = self.reuse.as_ref().map(|r| r.join(format!("seed{seed}")));
@@ -237,7 +233,7 @@ impl Training<'_> {
         if let Some(k) = reusable {
             eprintln!("{}: reusing the training and tagging kept in {}", self.name, k.display());
             copy_tree(&k.join("train"), &layout.train());
-            for m in &methods {
+            for m in methods {
                 std::fs::copy(k.join(tagged_name(m)), dir.join(tagged_name(m))).expect("cannot copy a kept tagging");
             }
         } else {
@@ -252,7 +248,7 @@ impl Training<'_> {
                 train_args.push("--exposure".into());
             }
             cogeo(&train_args);
-            for method in &methods {
+            for method in methods {
                 let tagged = dir.join(tagged_name(method));
                 cogeo(&pipeline::tag(
                     &layout.trained_scene(),
@@ -265,7 +261,7 @@ impl Training<'_> {
             if let Some(k) = &kept {
                 common::make_folder(k, |partial| {
                     copy_tree(&layout.train(), &partial.join("train"));
-                    for m in &methods {
+                    for m in methods {
                         std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
                             .expect("cannot keep a tagging");
                     }
@@ -273,13 +269,31 @@ impl Training<'_> {
                 eprintln!("{}: training and tagging kept in {}", self.name, k.display());
             }
         }
-        let train_metrics = read_json(&layout.train().join("metrics.json"));
+    }
+
+    /// Trains the scene with `seed` into `dir`, tags it, runs each variant and scores it: one row per
+    /// variant, with the device and the training's seed and test PSNR.
+    fn variants(&self, dir: &Path, seed: u64, variants: &[(&str, &str, &[&str])]) -> Vec<Value> {
+        let p = |x: &Path| x.to_string_lossy().into_owned();
+        let data = self.data;
+        let layout = Layout { out: dir };
+        let capture = Capture::at(data);
+        // the ceiling removes nothing: it needs neither the composite's training nor a tagging
+        let mut methods: Vec<&str> = variants.iter().filter(|v| v.0 != CAPTURE_CEILING).map(|v| v.1).collect();
+        methods.sort();
+        methods.dedup();
+        let train_metrics = if methods.is_empty() {
+            Value::Null
+        } else {
+            self.train_and_tag(dir, seed, &methods);
+            read_json(&layout.train().join("metrics.json"))
+        };
         let mut rows = Vec::new();
         for (k, (variant, method, extra)) in variants.iter().enumerate() {
             let out = dir.join(format!("variant_{k}"));
             if *variant == CAPTURE_CEILING {
                 let Some(original) = self.original else { continue };
-                rows.push(self.ceiling_row(original, &out, seed, &train_metrics));
+                rows.push(self.ceiling_row(original, &out));
                 continue;
             }
             let tagged = dir.join(format!("tagged_{method}.ply"));
