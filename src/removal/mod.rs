@@ -33,6 +33,7 @@ pub mod consensus;
 pub mod fuse;
 pub mod prune;
 pub mod held_out;
+pub mod hull;
 pub mod refine;
 pub mod report;
 pub mod view;
@@ -100,6 +101,8 @@ pub struct RemoveOptions {
     pub keep_alpha: f32,
     #[command(flatten)]
     pub stages: Stages,
+    #[command(flatten)]
+    pub hull: hull::HullConfig,
     /// How new Gaussians are made: depth (back-projected completed depth, fused and pruned) or
     /// nearest-copy (baseline: each removed Gaussian replaced by a copy of its nearest remaining one).
     #[arg(long, value_enum, default_value_t)]
@@ -179,7 +182,7 @@ pub fn remove(
     check_inputs(scene, labels, cameras, photos, opts)?;
     let mut clock = StageClock::start();
     // 1. selection
-    let selection = select::select_gaussians(scene, labels, &opts.labels)?;
+    let mut selection = select::select_gaussians(scene, labels, &opts.labels)?;
     clock.lap("select");
     // 2. hole masks, from renders before and after deletion
     let holes = HoleConfig {
@@ -188,8 +191,23 @@ pub fn remove(
         keep_alpha: opts.keep_alpha,
         background: opts.background,
     };
-    let masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
+    let mut masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
     clock.lap("masks");
+    // 1b. the background Gaussians the tagging left inside the objects go too (and the holes are
+    // drawn again without them)
+    let left_inside = hull::remove_leftovers_inside(
+        gpu,
+        scene,
+        labels,
+        &opts.labels,
+        cameras,
+        &holes,
+        &opts.hull,
+        &mut selection,
+        &mut masked,
+        &mut |d, t| progress("hull", d, t),
+    )?;
+    clock.lap("hull");
     let mut views: Vec<EditedView> = masked
         .into_iter()
         .enumerate()
@@ -242,7 +260,13 @@ pub fn remove(
         // the fusion's settings as used (its opacity depends on the refinement)
         options: RemoveOptions { fuse: opts.fuse_config(), ..opts.clone() },
         completion: opts.stages.complete.then(|| CompletionSummary::of(completer, !photos.is_empty())),
-        gaussians: GaussianCounts { input: scene.len(), removed: removed_count, pruned, output: result.len() },
+        gaussians: GaussianCounts {
+            input: scene.len(),
+            removed: removed_count,
+            left_inside,
+            pruned,
+            output: result.len(),
+        },
         views: if opts.stages.complete { views.iter().map(|v| v.report.clone()).collect() } else { Vec::new() },
         fusion,
         prune: prune_used,

@@ -59,7 +59,10 @@ impl CompletionSummary {
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct GaussianCounts {
     pub input: usize,
+    /// All removed, those `left_inside` included.
     pub removed: usize,
+    /// Background Gaussians removed as left inside the objects (stage 1b, `removal::hull`).
+    pub left_inside: usize,
     pub pruned: usize,
     pub output: usize,
 }
