@@ -108,7 +108,8 @@ pub fn leftovers_inside(
             let Some((x, y, z)) = cam.project_to_image(m) else { continue };
             let p = y as usize * cam.width as usize + x as usize;
             let rendered = view.after_removal.depth[p] as f64;
-            if !(rendered > 0.0) || z > rendered * (1.0 + VISIBLE_TOLERANCE) {
+            let visible = rendered > 0.0 && z <= rendered * (1.0 + VISIBLE_TOLERANCE);
+            if !visible {
                 continue;
             }
             seen += 1;
