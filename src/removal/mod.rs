@@ -291,6 +291,12 @@ fn check_inputs(
     if opts.labels.is_empty() {
         bail!("no labels to remove");
     }
+    if !(0.0..=1.0).contains(&opts.hull.share) {
+        bail!("--hull-share {} is not a share in [0, 1]", opts.hull.share);
+    }
+    if !(opts.hull.surface_tolerance >= 0.0) {
+        bail!("--hull-surface-tolerance {} is negative", opts.hull.surface_tolerance);
+    }
     if !photos.is_empty() && photos.len() != cameras.len() {
         bail!("{} photos for {} views", photos.len(), cameras.len());
     }
