@@ -294,8 +294,8 @@ fn check_inputs(
     if !(0.0..=1.0).contains(&opts.hull.share) {
         bail!("--hull-share {} is not a share in [0, 1]", opts.hull.share);
     }
-    if !(opts.hull.surface_tolerance >= 0.0) {
-        bail!("--hull-surface-tolerance {} is negative", opts.hull.surface_tolerance);
+    if !(0.0..).contains(&opts.hull.surface_tolerance) {
+        bail!("--hull-surface-tolerance {} is not a number >= 0", opts.hull.surface_tolerance);
     }
     if !photos.is_empty() && photos.len() != cameras.len() {
         bail!("{} photos for {} views", photos.len(), cameras.len());
