@@ -140,9 +140,8 @@ impl MaskedView {
     }
 
     /// Do the Gaussians left after removal cover pixel `p` (alpha at least `keep_alpha`)? In the
-    /// fill these are the Gaussians left behind the objects, whose depth (`leftover_depth`),
-    /// colors (`EditedView::take_leftover_colors`) and place in the patch (`patch_pixels`) every
-    /// later stage weighs by this one rule.
+    /// fill these are the Gaussians left behind the objects, whose depth (`leftover_depth`) and
+    /// place in the patch (`patch_pixels`) the later stages weigh by this one rule.
     pub fn leftovers_cover(&self, p: usize) -> bool {
         self.after_removal.alpha[p] >= self.keep_alpha
     }

@@ -3,7 +3,6 @@
 //! reads and writes these fields (and the view's line of the report) instead of a vector of its
 //! own per stage.
 
-use super::complete::leftover_colors::{disagreeing_transfers, unlike_invention};
 use super::complete::photo_depth::DepthScale;
 use super::complete::rectify::Intrinsics;
 use super::complete::source_views::SourceView;
@@ -22,8 +21,7 @@ pub struct EditedView<'a> {
     pub masked: MaskedView,
     /// Stage 3: the inpainted image and completed depth (None: removal only).
     pub completed: Option<Completed>,
-    /// Stage 3c: the hole pixels that took a photo's color, or the leftovers' render where no
-    /// photo lent one (`take_leftover_colors`); None: no transfer ran.
+    /// Stage 3c: the hole pixels that took a photo's color; None: no transfer ran.
     pub transferred: Option<Vec<bool>>,
     /// The photo's colors as an affine map of the original render's (identity without a photo).
     pub photo_colors: ColorAffine,
@@ -49,18 +47,6 @@ pub struct ViewReport {
     pub farther_covered_pixels: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hole_depth_scale: Option<DepthScale>,
-    /// Fill pixels no photo lent a color that took the render of the Gaussians left behind the
-    /// objects (`EditedView::take_leftover_colors`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub leftover_color_pixels: Option<usize>,
-    /// Transferred colors refused for disagreeing with the render of the Gaussians left behind
-    /// the objects, which they took instead (`complete::leftover_colors`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub refused_transfer_pixels: Option<usize>,
-    /// Fill pixels no photo lent a color that kept the invention because the render of the
-    /// Gaussians left behind the objects departs from it (`complete::leftover_colors`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub invention_kept_pixels: Option<usize>,
     /// Fill pixels that took the depth of the Gaussians left behind the objects
     /// (`complete::leftover_depth`).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -134,58 +120,6 @@ impl<'a> EditedView<'a> {
         })
     }
 
-    /// After the color transfer: the fill pixels no photo lent a color, where the Gaussians left
-    /// behind the objects cover them (`MaskedView::leftovers_cover`) and their render looks like the
-    /// invention on average (`leftover_colors::unlike_invention`), take that render (in the
-    /// photo's colors, as the transferred ones are) instead of the inpainter's invention, and
-    /// count as not invented. The leftovers were trained by every view that saw around the
-    /// object, so they are one invention for all views, where each view's inpainter makes its
-    /// own: on the cup composite the exemplar filled the desk under the box with a dark blob that
-    /// no two views agreed on (held-out masked PSNR 25.22 -> 25.81 dB, LPIPS 0.183 -> 0.187;
-    /// the synth rooms -0.06 to +0.01 dB). So do the covered pixels whose transferred colors
-    /// disagree with the leftovers' render on average (`leftover_colors`). Returns the pixels
-    /// taken where no photo lent a color, those whose transferred color was refused, and those
-    /// that kept the invention because the leftovers' render departs from it.
-    pub fn take_leftover_colors(&mut self) -> LeftoverColors {
-        let (Some(completed), Some(transferred)) = (self.completed.as_mut(), self.transferred.as_mut()) else {
-            return LeftoverColors::default();
-        };
-        let leftovers = &self.masked.after_removal;
-        let n = leftovers.alpha.len();
-        let covered = |p: usize| self.masked.fill[p] && self.masked.leftovers_cover(p);
-        let mut in_photo_colors = vec![0f32; 3 * n];
-        for p in (0..n).filter(|&p| covered(p)) {
-            let rgb = self.photo_colors.apply_pixel([0, 1, 2].map(|c| leftovers.rgb[c * n + p] as f64));
-            for c in 0..3 {
-                in_photo_colors[c * n + p] = (rgb[c] as f32).clamp(0.0, 1.0);
-            }
-        }
-        let w = self.camera.width as usize;
-        let with = |transfer: bool| -> Vec<bool> { (0..n).map(|p| covered(p) && transferred[p] == transfer).collect() };
-        let disagreeing = disagreeing_transfers(&completed.rgb, &in_photo_colors, &with(true), w, n / w);
-        let unlike = unlike_invention(&completed.rgb, &in_photo_colors, &with(false), w, n / w);
-        let mut counts = LeftoverColors::default();
-        for p in (0..n).filter(|&p| covered(p)) {
-            if transferred[p] && !disagreeing[p] {
-                continue;
-            }
-            if !transferred[p] && unlike[p] {
-                counts.invention_kept += 1;
-                continue;
-            }
-            for c in 0..3 {
-                completed.rgb[c * n + p] = in_photo_colors[c * n + p];
-            }
-            if transferred[p] {
-                counts.refused += 1;
-            } else {
-                transferred[p] = true;
-                counts.taken += 1;
-            }
-        }
-        counts
-    }
-
     /// The fill pixels no photo's color reached: what the inpainter invented.
     pub fn invented(&self) -> Vec<bool> {
         let fill = &self.masked.fill;
@@ -203,15 +137,4 @@ impl<'a> EditedView<'a> {
 fn fit_photo_colors(m: &MaskedView, photo: &[f32]) -> ColorAffine {
     let known: Vec<bool> = m.hole.iter().zip(&m.before.alpha).map(|(&hole, &a)| !hole && a > 0.99).collect();
     ColorAffine::fit(&m.before.rgb, photo, Some(&known))
-}
-
-/// What `EditedView::take_leftover_colors` did, in fill pixels the leftovers cover.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct LeftoverColors {
-    /// No photo lent a color; the leftovers' render replaced the invention.
-    pub taken: usize,
-    /// The transferred color disagreed with the leftovers' render, which replaced it.
-    pub refused: usize,
-    /// No photo lent a color; the leftovers' render departs from the invention, which stays.
-    pub invention_kept: usize,
 }

@@ -26,7 +26,6 @@ pub mod diffusion;
 pub mod exemplar;
 pub mod harmonic;
 pub mod inpaint;
-pub mod leftover_colors;
 pub mod leftover_depth;
 pub mod photo_depth;
 pub mod rectify;
