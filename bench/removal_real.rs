@@ -290,7 +290,11 @@ pub fn run(
         rows = merged;
     }
     let device = rows.first().and_then(|r| r["device"].as_str()).unwrap_or("?").to_string();
-    let order = |r: &serde_json::Value| REAL_SCENES.iter().position(|s| r["scene"] == s.name).unwrap_or(usize::MAX);
+    // scene by scene, each in the variants' order, however many runs the rows were kept from
+    let order = |r: &serde_json::Value| {
+        let scene = REAL_SCENES.iter().position(|s| r["scene"] == s.name).unwrap_or(usize::MAX);
+        (scene, crate::VARIANTS.iter().position(|v| r["variant"] == v.0).unwrap_or(usize::MAX))
+    };
     rows.sort_by_key(order);
     let all: Vec<&RealSpec> = REAL_SCENES.iter().filter(|s| rows.iter().any(|r| r["scene"] == s.name)).collect();
     let md = table(&rows, &all, &device);
