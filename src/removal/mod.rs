@@ -91,8 +91,8 @@ pub struct RemoveOptions {
     /// hole; 1 fills the whole hole. The background Gaussians left behind the removed objects never
     /// keep a pixel: it is filled (photo colors where other views saw it) and gets new Gaussians.
     /// Where they cover a fill pixel with at least this alpha, their depth competes with the
-    /// completed one on photo-consistency, and where they lie in front of the completed surface
-    /// the pixel gets no new Gaussian.
+    /// completed one on photo-consistency, and where they lie more than 6 % in front of the
+    /// completed surface the pixel gets no new Gaussian.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
     #[command(flatten)]
@@ -356,8 +356,8 @@ fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Comp
 /// behind the objects lend no color: on composites trained like their captures (from the
 /// capture's own sparse points) they rendered a dark box-shaped patch of desk where the cup's box
 /// stood, and the targets that took their render kept it (held-out masked PSNR 22.26 -> 27.39 dB
-/// without; the statue composites -0.04 / -0.10 dB, LPIPS 0.231 -> 0.210, 0.322 -> 0.282;
-/// bench/JOURNAL.md, 2026-11-29, 19:52).
+/// without; statue-one -0.10 dB, LPIPS 0.322 -> 0.282, statue-two-of-three -0.04 dB, LPIPS
+/// 0.231 -> 0.210; bench/JOURNAL.md, 2026-11-29, 19:52).
 fn transfer_colors(
     views: &mut [EditedView],
     cameras: &[Camera],
