@@ -278,6 +278,8 @@ pub fn run(
         r["downscale"] = serde_json::json!(factors);
         r["iters"] = serde_json::json!(iters);
     }
+    // a row's place in the variants' order; None for a variant since renamed or retired
+    let variant_index = |r: &serde_json::Value| crate::VARIANTS.iter().position(|v| r["variant"] == v.0);
     if let Ok(text) = std::fs::read_to_string(&json_path) {
         let old: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
         let kept = old["rows"].as_array().cloned().unwrap_or_default().into_iter();
@@ -286,8 +288,7 @@ pub fn run(
             r["scene"].as_str().is_some_and(|n| run.contains(&n)) && variants.iter().any(|v| r["variant"] == v.0)
         };
         // a row of a variant since renamed or retired goes
-        let current = |r: &serde_json::Value| crate::VARIANTS.iter().any(|v| r["variant"] == v.0);
-        let mut merged: Vec<serde_json::Value> = kept.filter(|r| !rerun(r) && current(r)).collect();
+        let mut merged: Vec<serde_json::Value> = kept.filter(|r| !rerun(r) && variant_index(r).is_some()).collect();
         merged.append(&mut rows);
         rows = merged;
     }
@@ -295,7 +296,7 @@ pub fn run(
     // scene by scene, each in the variants' order, however many runs the rows were kept from
     let order = |r: &serde_json::Value| {
         let scene = REAL_SCENES.iter().position(|s| r["scene"] == s.name).unwrap_or(usize::MAX);
-        (scene, crate::VARIANTS.iter().position(|v| r["variant"] == v.0).unwrap_or(usize::MAX))
+        (scene, variant_index(r).unwrap_or(usize::MAX))
     };
     rows.sort_by_key(order);
     let all: Vec<&RealSpec> = REAL_SCENES.iter().filter(|s| rows.iter().any(|r| r["scene"] == s.name)).collect();
