@@ -258,7 +258,7 @@ pub fn generate(cfg: &SynthConfig, out: &Path, progress: &dyn Fn(usize, usize)) 
     let depths: Vec<&[f32]> = with_objects.iter().map(|v| &v.depth[..]).collect();
     let seen_by = |points: &[V3]| {
         let points: Vec<Option<V3>> = points.iter().copied().map(Some).collect();
-        never_seen(&points, &cameras, lens, &train, &depths, SEEN_TOLERANCE)
+        never_seen(&points, &cameras, lens, &train, &depths, SEEN_TOLERANCE, 0)
     };
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cfg.width, cfg.height);
@@ -310,8 +310,11 @@ fn create_folders(out: &Path, subset_dir: Option<&str>) -> Result<()> {
 }
 
 /// 255 where the surface point of a pixel is visible in no training view of the full scene: no
-/// training view's depth (`depths`, the scene with its objects) is within `tolerance` (relative)
-/// of the point's own. Pixels without a point (nothing there) are 0.
+/// training view's depth (`depths`, the scene with its objects) within `reach` pixels of where the
+/// point lands is within `tolerance` (relative) of the point's own. Pixels without a point
+/// (nothing there) are 0. A `reach` of 1 keeps a rendered depth's pixel steps from counting as
+/// unseen where a view sees a surface at a grazing angle (one pixel there spans more depth than
+/// the tolerance).
 fn never_seen(
     points: &[Option<V3>],
     cameras: &[Camera],
@@ -319,6 +322,7 @@ fn never_seen(
     train: &[usize],
     depths: &[&[f32]],
     tolerance: f64,
+    reach: usize,
 ) -> Vec<u8> {
     points
         .iter()
@@ -326,7 +330,13 @@ fn never_seen(
             let Some(point) = *point else { return 0 };
             let seen = train.iter().any(|&t| {
                 let Some((q, z)) = pixel_through(&cameras[t], lens, point) else { return false };
-                (depths[t][q] as f64 - z).abs() <= tolerance * z
+                let (w, h) = (cameras[t].width as usize, cameras[t].height as usize);
+                let (x, y) = (q % w, q / w);
+                let rows = y.saturating_sub(reach)..(y + reach + 1).min(h);
+                rows.into_iter().any(|yy| {
+                    let cols = x.saturating_sub(reach)..(x + reach + 1).min(w);
+                    cols.into_iter().any(|xx| (depths[t][yy * w + xx] as f64 - z).abs() <= tolerance * z)
+                })
             });
             if seen {
                 0
