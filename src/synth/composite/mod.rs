@@ -167,10 +167,14 @@ pub fn composite(
             |c: &Composited| c.depth.iter().zip(&c.labels).map(|(&z, &l)| if absent(l) { 0.0 } else { z }).collect();
         with_objects.iter().map(show).collect()
     };
+    fn slices(depths: &[Vec<f32>]) -> Vec<&[f32]> {
+        depths.iter().map(|d| &d[..]).collect()
+    }
     let showing_background = depths_showing(&|l| l != 0);
-    let showing_subset = depths_showing(&|l| cfg.gt_without.contains(&l));
-    let background_depths: Vec<&[f32]> = showing_background.iter().map(|d| &d[..]).collect();
-    let subset_depths: Vec<&[f32]> = showing_subset.iter().map(|d| &d[..]).collect();
+    let background_depths = slices(&showing_background);
+    // only with a subset ground truth: a copy of every view's depth is 66 MB on the cup
+    let showing_subset = subset_dir.is_some().then(|| depths_showing(&|l| cfg.gt_without.contains(&l)));
+    let subset_depths = showing_subset.as_deref().map(slices);
     let surface_points = |cam: &Camera, depth: &[f32]| -> Vec<Option<V3>> {
         let w = cam.width as usize;
         depth.iter().enumerate().map(|(p, &z)| z.is_finite().then(|| cam.pixel_point(p % w, p / w, z as f64))).collect()
@@ -188,13 +192,13 @@ pub fn composite(
         let unseen =
             never_seen(&points, &cameras, Lens::Pinhole, &train_views, &background_depths, SEEN_TOLERANCE, SEEN_REACH);
         write_png(&out.join(format!("unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
-        if let Some(d) = &subset_dir {
+        if let (Some(d), Some(subset_depths)) = (&subset_dir, &subset_depths) {
             let s = &without_subset[i];
             write_png_rgb(&out.join(format!("{d}/images/{name}.png")), w, h, &s.rgb)?;
             write_exr(&out.join(format!("{d}/depth/{name}.exr")), w, h, &[("Y", &finite_or_zero(&s.depth))])?;
             let points = surface_points(&v.camera, &s.depth);
             let unseen =
-                never_seen(&points, &cameras, Lens::Pinhole, &train_views, &subset_depths, SEEN_TOLERANCE, SEEN_REACH);
+                never_seen(&points, &cameras, Lens::Pinhole, &train_views, subset_depths, SEEN_TOLERANCE, SEEN_REACH);
             write_png(&out.join(format!("{d}/unseen_mask/{name}.png")), w, h, image::ColorType::L8, &unseen)?;
         }
         progress("write", i + 1, count);
