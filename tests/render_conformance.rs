@@ -41,6 +41,8 @@ fn compare(gpu_out: &RenderOutput, reference: &ReferenceImage) -> Errors {
         if reference.alpha[i] > 0.0 {
             let r = reference.expected_depth[i];
             e.depth_rel = e.depth_rel.max((gpu_out.expected_depth[i] as f64 - r).abs() / r.abs().max(1e-6));
+            let m = reference.median_depth[i];
+            e.depth_rel = e.depth_rel.max((gpu_out.median_depth[i] as f64 - m).abs() / m.abs().max(1e-6));
             let acc = reference.depth[i];
             e.depth_rel = e.depth_rel.max((gpu_out.depth[i] as f64 - acc).abs() / acc.abs().max(1e-3));
         }
@@ -198,6 +200,7 @@ fn every_blend_layout_renders_the_same_bits() {
             assert_eq!(out.rgb, reference.rgb, "scene {k}, {rows} rows: color");
             assert_eq!(out.alpha, reference.alpha, "scene {k}, {rows} rows: alpha");
             assert_eq!(out.expected_depth, reference.expected_depth, "scene {k}, {rows} rows: depth");
+            assert_eq!(out.median_depth, reference.median_depth, "scene {k}, {rows} rows: median depth");
             assert_eq!(out.n_contrib, reference.n_contrib, "scene {k}, {rows} rows: contributors");
             assert_eq!(out.features, reference.features, "scene {k}, {rows} rows: features");
         }

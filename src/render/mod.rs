@@ -106,6 +106,10 @@ pub struct RenderOutput {
     /// Accumulated depth sum w_i z_i.
     pub depth: Vec<f32>,
     pub expected_depth: Vec<f32>,
+    /// Depth of the Gaussian that takes the transmittance to one half or below (the expected depth
+    /// where the pixel never gets half opaque): a surface's depth where faint layers in front of
+    /// or behind it pull the expected depth off it.
+    pub median_depth: Vec<f32>,
     pub final_t: Vec<f32>,
     pub n_contrib: Vec<u32>,
     /// feature_dim planes, when features were rendered.
@@ -164,6 +168,7 @@ struct ImageBuffers {
     alpha: Buffer,
     depth: Buffer,
     expected_depth: Buffer,
+    median_depth: Buffer,
     final_t: Buffer,
     n_contrib: Buffer,
     features: Buffer,
@@ -330,6 +335,7 @@ impl Rasterizer {
             alpha: buf("out_alpha", hw)?,
             depth: buf("out_depth", hw)?,
             expected_depth: buf("out_expected_depth", hw)?,
+            median_depth: buf("out_median_depth", hw)?,
             final_t: buf("out_final_t", hw)?,
             n_contrib: buf("out_n_contrib", hw)?,
             features: buf("out_features", feature_dim.max(1) as u64 * hw)?,
@@ -470,6 +476,7 @@ impl Rasterizer {
             alpha: image.alpha.download(g, hw)?,
             depth: image.depth.download(g, hw)?,
             expected_depth: image.expected_depth.download(g, hw)?,
+            median_depth: image.median_depth.download(g, hw)?,
             final_t: image.final_t.download(g, hw)?,
             n_contrib: image.n_contrib.download(g, hw)?,
             features: if feature_dim > 0 { image.features.download(g, feature_dim as usize * hw)? } else { Vec::new() },
@@ -537,6 +544,7 @@ impl Rasterizer {
             out_final_t: im.final_t.address(),
             out_n_contrib: im.n_contrib.address(),
             out_features: im.features.address(),
+            out_median_depth: im.median_depth.address(),
             viewmat: [
                 r[0][0] as f32,
                 r[0][1] as f32,

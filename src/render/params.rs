@@ -31,6 +31,7 @@ pub struct RenderParams {
     pub out_final_t: u64,
     pub out_n_contrib: u64,
     pub out_features: u64,
+    pub out_median_depth: u64,
     pub viewmat: [f32; 12],
     pub campos: [f32; 4],
     pub fx: f32,

@@ -31,6 +31,9 @@ pub struct ReferenceImage {
     pub alpha: Vec<f64>,
     pub depth: Vec<f64>,
     pub expected_depth: Vec<f64>,
+    /// Depth of the Gaussian that takes the transmittance to one half or below; the expected depth
+    /// where it never gets there (blend.comp's median depth).
+    pub median_depth: Vec<f64>,
     pub features: Vec<f64>,
     pub ambiguous: Vec<bool>,
 }
@@ -182,6 +185,7 @@ pub fn render_reference(
         alpha: vec![0.0; hw],
         depth: vec![0.0; hw],
         expected_depth: vec![0.0; hw],
+        median_depth: vec![0.0; hw],
         features: vec![0.0; d * hw],
         ambiguous: vec![false; hw],
     };
@@ -193,6 +197,7 @@ pub fn render_reference(
             let mut t = 1.0f64;
             let mut c = [0.0; 3];
             let (mut dsum, mut wsum) = (0.0, 0.0);
+            let mut median = None;
             feat.iter_mut().for_each(|v| *v = 0.0);
             let mut ambiguous = false;
             let mut last: Option<&ProjectedGaussian> = None;
@@ -223,6 +228,10 @@ pub fn render_reference(
                 if t_next < 1e-4 {
                     break;
                 }
+                // float32 can put the transmittance on either side of one half
+                if (t_next / 0.5).ln().abs() < 2e-5 {
+                    ambiguous = true;
+                }
                 // two contributors whose depths float32 cannot order reliably; identical means are
                 // ordered by index on both sides
                 if let Some(l) = last {
@@ -244,6 +253,9 @@ pub fn render_reference(
                     }
                 }
                 t = t_next;
+                if median.is_none() && t <= 0.5 {
+                    median = Some(g.depth);
+                }
             }
             let pi = py * w + px;
             for ch in 0..3 {
@@ -252,6 +264,7 @@ pub fn render_reference(
             out.alpha[pi] = 1.0 - t;
             out.depth[pi] = dsum;
             out.expected_depth[pi] = dsum / wsum.max(1e-10);
+            out.median_depth[pi] = median.unwrap_or(out.expected_depth[pi]);
             for (ch, v) in feat.iter().enumerate() {
                 out.features[ch * hw + pi] = *v;
             }

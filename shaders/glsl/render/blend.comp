@@ -32,7 +32,7 @@ void main() {
     uvec2 range = UVec2View(p.tile_ranges).v[tile];
     uint start = range.x, end = range.y;
     vec2 pixel[ROWS];
-    float T[ROWS], D[ROWS], W[ROWS], F[ROWS];
+    float T[ROWS], D[ROWS], W[ROWS], F[ROWS], M[ROWS];
     vec3 C[ROWS];
     uint n_contrib[ROWS];
     bool finished[ROWS];
@@ -45,6 +45,7 @@ void main() {
         D[r] = 0.0;
         W[r] = 0.0;
         F[r] = 0.0;
+        M[r] = -1.0;  // not yet half opaque
         n_contrib[r] = start;
         finished[r] = !(pix.x < p.width && pix.y < p.height);
         lane_finished = lane_finished && finished[r];
@@ -87,6 +88,7 @@ void main() {
                         D[r] += w * cd.w;
                         W[r] += w;
                         if (ONE_FEATURE != 0) F[r] += w * f;
+                        if (M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
                         n_contrib[r] = batch + j + 1;
                     }
                 }
@@ -105,7 +107,10 @@ void main() {
         p.out_rgb.v[2 * hw + pi] = rgb.b;
         p.out_alpha.v[pi] = 1.0 - T[r];
         p.out_depth.v[pi] = D[r];
-        p.out_expected_depth.v[pi] = D[r] / max(W[r], 1e-10);
+        float expected = D[r] / max(W[r], 1e-10);
+        p.out_expected_depth.v[pi] = expected;
+        // a pixel never half opaque has no median: its expected depth stands in
+        p.out_median_depth.v[pi] = M[r] >= 0.0 ? M[r] : expected;
         p.out_final_t.v[pi] = T[r];
         p.out_n_contrib.v[pi] = n_contrib[r];
         if (ONE_FEATURE != 0) p.out_features.v[pi] = F[r];

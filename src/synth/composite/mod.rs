@@ -131,7 +131,7 @@ pub fn composite(
     for (i, v) in loaded.into_iter().enumerate() {
         let r = renderer.render(&v.camera, &RenderSettings::default())?;
         let depth = r
-            .expected_depth
+            .median_depth
             .iter()
             .zip(&r.alpha)
             .map(|(&z, &a)| if a > COVERED_ALPHA && z > 0.0 { z } else { f32::INFINITY })
