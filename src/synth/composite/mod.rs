@@ -82,7 +82,7 @@ pub struct CompositeSummary {
     pub views_with_overlap: usize,
 }
 
-/// The camera-z depth of the original scene, treated as empty below this alpha.
+/// The camera-z (median) depth of the original scene, treated as empty below this alpha.
 const COVERED_ALPHA: f32 = 0.5;
 /// Relative depth agreement for a background point to count as seen by a training view: looser
 /// than the synth's 2 % since both depths are renders of Gaussians.
@@ -130,6 +130,10 @@ pub fn composite(
     let mut views = Vec::with_capacity(count);
     for (i, v) in loaded.into_iter().enumerate() {
         let r = renderer.render(&v.camera, &RenderSettings::default())?;
+        // the median depth: the cup's desk is many faint Gaussians whose expected depth swings by
+        // two object sizes in front of it (grazing views) and six behind, which cut the objects
+        // into fragments and let views see footprints through the cuts (bench/JOURNAL.md,
+        // 2026-11-30, 03:14)
         let depth = r
             .median_depth
             .iter()
