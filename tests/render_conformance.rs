@@ -58,7 +58,12 @@ fn check(scene: &GaussianScene, camera: &Camera, features: Option<(&[f32], usize
     let buffers = SceneBuffers::upload(&g, scene, features).unwrap();
     let mut raster = Rasterizer::new(&g).unwrap();
     let settings = RenderSettings { background, features: features.is_some(), ..Default::default() };
-    let out = raster.render(&buffers, camera, &settings).unwrap();
+    let plain = raster.render(&buffers, camera, &settings).unwrap();
+    assert!(plain.median_depth.is_empty(), "{label}: a median depth nobody asked for");
+    // the median depth is a variant of blend.comp of its own: everything else stays bit for bit
+    let out = raster.render(&buffers, camera, &RenderSettings { median_depth: true, ..settings }).unwrap();
+    assert!(out.rgb == plain.rgb && out.alpha == plain.alpha && out.expected_depth == plain.expected_depth);
+    assert!(out.n_contrib == plain.n_contrib && out.final_t == plain.final_t && out.features == plain.features);
     let reference = render_reference(scene, camera, background.map(|v| v as f64), 0.01, scene.sh_degree, features);
     let e = compare(&out, &reference);
     let hw = (camera.width * camera.height) as usize;
@@ -191,7 +196,8 @@ fn every_blend_layout_renders_the_same_bits() {
         let features = random_features(71 + k as u64, scene.len(), 40);
         let buffers = SceneBuffers::upload(&g, &scene, Some((&features, 40))).unwrap();
         let cam = test_camera(83, 37);
-        let settings = RenderSettings { background: [0.2, 0.3, 0.4], features: true, ..Default::default() };
+        let settings =
+            RenderSettings { background: [0.2, 0.3, 0.4], features: true, median_depth: true, ..Default::default() };
         let reference = Rasterizer::new(&g).unwrap().render(&buffers, &cam, &settings).unwrap();
         assert!(reference.alpha.iter().any(|&a| a > 0.5), "scene {k} renders nothing");
         for rows in [1, 2, 4, 8, 16] {

@@ -180,6 +180,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         sh_degree: a.sh_degree,
         features: a.features,
         timestamps: a.timings,
+        median_depth: false,
     };
     let batch = cogeo::io::OutputBatch::begin();
     render_views(&gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings)?;

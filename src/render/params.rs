@@ -1,5 +1,5 @@
 //! The per-frame parameter block of the render passes; mirrors `shaders/glsl/common/render_params.glsl`
-//! field for field (std430: pointers first, then 4-byte scalars).
+//! field for field (std430: pointers first, then 4-byte scalars, then the one pointer added since).
 
 use bytemuck::{Pod, Zeroable};
 
@@ -31,7 +31,6 @@ pub struct RenderParams {
     pub out_final_t: u64,
     pub out_n_contrib: u64,
     pub out_features: u64,
-    pub out_median_depth: u64,
     pub viewmat: [f32; 12],
     pub campos: [f32; 4],
     pub fx: f32,
@@ -51,6 +50,8 @@ pub struct RenderParams {
     pub tiles_x: u32,
     pub tiles_y: u32,
     pub feature_dim: u32,
+    /// Written only by blend.comp's MEDIAN_DEPTH variant; last, as in the shader.
+    pub out_median_depth: u64,
 }
 
 /// Push constants of most render passes: just the address of the parameter block.

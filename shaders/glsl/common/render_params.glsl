@@ -30,7 +30,6 @@ layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Ren
     Floats out_final_t;    // transmittance after the last blended Gaussian (backward pass state)
     Uints out_n_contrib;   // one past the intersection index of the last blended Gaussian
     Floats out_features;   // feature_dim planes
-    Floats out_median_depth; // depth where the transmittance falls to one half (blend.comp)
     // camera
     float viewmat[12];     // row-major [R | t], world to camera
     float campos[4];       // camera center in world space, w unused
@@ -45,6 +44,7 @@ layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Ren
     uint tiles_x;
     uint tiles_y;
     uint feature_dim;
+    Floats out_median_depth; // depth where the transmittance falls to one half (blend.comp, MEDIAN_DEPTH)
 };
 
 const uint TILE = 16;

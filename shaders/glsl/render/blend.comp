@@ -21,6 +21,7 @@
 layout(constant_id = 0) const uint ROWS = 1;
 layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
 layout(constant_id = 2) const uint ONE_FEATURE = 0;
+layout(constant_id = 3) const uint MEDIAN_DEPTH = 0;
 layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; };
 
@@ -88,7 +89,7 @@ void main() {
                         D[r] += w * cd.w;
                         W[r] += w;
                         if (ONE_FEATURE != 0) F[r] += w * f;
-                        if (M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
+                        if (MEDIAN_DEPTH != 0 && M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
                         n_contrib[r] = batch + j + 1;
                     }
                 }
@@ -107,10 +108,9 @@ void main() {
         p.out_rgb.v[2 * hw + pi] = rgb.b;
         p.out_alpha.v[pi] = 1.0 - T[r];
         p.out_depth.v[pi] = D[r];
-        float expected = D[r] / max(W[r], 1e-10);
-        p.out_expected_depth.v[pi] = expected;
+        p.out_expected_depth.v[pi] = D[r] / max(W[r], 1e-10);
         // a pixel never half opaque has no median: its expected depth stands in
-        p.out_median_depth.v[pi] = M[r] >= 0.0 ? M[r] : expected;
+        if (MEDIAN_DEPTH != 0) p.out_median_depth.v[pi] = M[r] >= 0.0 ? M[r] : D[r] / max(W[r], 1e-10);
         p.out_final_t.v[pi] = T[r];
         p.out_n_contrib.v[pi] = n_contrib[r];
         if (ONE_FEATURE != 0) p.out_features.v[pi] = F[r];

@@ -129,7 +129,7 @@ pub fn composite(
     let mut renderer = SceneRenderer::new(gpu, &scene, None)?;
     let mut views = Vec::with_capacity(count);
     for (i, v) in loaded.into_iter().enumerate() {
-        let r = renderer.render(&v.camera, &RenderSettings::default())?;
+        let r = renderer.render(&v.camera, &RenderSettings { median_depth: true, ..Default::default() })?;
         // the median depth: the cup's desk is many faint Gaussians whose expected depth swings by
         // two object sizes in front of it (grazing views) and six behind, which cut the objects
         // into fragments and let views see footprints through the cuts (bench/JOURNAL.md,
