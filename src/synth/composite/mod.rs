@@ -130,10 +130,10 @@ pub fn composite(
     let mut views = Vec::with_capacity(count);
     for (i, v) in loaded.into_iter().enumerate() {
         let r = renderer.render(&v.camera, &RenderSettings { median_depth: true, ..Default::default() })?;
-        // the median depth: the cup's desk is many faint Gaussians whose expected depth swings by
-        // two object sizes in front of it (grazing views) and six behind, which cut the objects
-        // into fragments and let views see footprints through the cuts (bench/JOURNAL.md,
-        // 2026-11-30, 03:14)
+        // the median depth: the cup's desk is many faint Gaussians whose expected depth lay near
+        // the objects from 3.3 object half sizes in front of it (grazing views) to 16 behind,
+        // which cut the objects into fragments and let views see footprints through the cuts
+        // (bench/JOURNAL.md, 2026-11-30, 03:14)
         let depth = r
             .median_depth
             .iter()
