@@ -451,3 +451,29 @@ fn only_movable_gaussians_step() {
     assert!(t.set_movable(&movable).is_err(), "densification reorders the Gaussians");
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }
+
+/// SH bands start training at multiples of `--sh-band-every` iterations and the bands not yet
+/// started stay exactly zero; by default (INRIA's 1000) a short run learns no view-dependent color.
+#[test]
+fn sh_bands_start_every_sh_band_every_iterations() {
+    use cogeo::train::trainer::{TrainConfig, Trainer};
+    let (gpu, mut scene, data) = one_view_scene(6, 200, 3, [1.0, 0.0, 0.0, 0.0]);
+    let k = scene.sh_coeffs() * 3;
+    for g in scene.sh.chunks_exact_mut(k) {
+        g[3..].fill(0.0);
+    }
+    let short = TrainConfig { iters: 100, densify: false, sh_band_every: 4, ..Default::default() };
+    let mut t = Trainer::new(&gpu, &data, &scene, short).unwrap();
+    for step in 0..10 {
+        assert_eq!(t.active_sh_degree(), (step / 4).min(3), "SH degree at iteration {step}");
+        t.iterate(&data, false).unwrap();
+    }
+    // bands 1 (from iteration 4) and 2 (from 8) trained, band 3 not yet
+    assert_eq!(t.download_scene().unwrap().learnt_sh_degree(), 2);
+    let inria = TrainConfig { iters: 100, densify: false, ..Default::default() };
+    let mut t = Trainer::new(&gpu, &data, &scene, inria).unwrap();
+    for _ in 0..10 {
+        t.iterate(&data, false).unwrap();
+    }
+    assert_eq!(t.download_scene().unwrap().learnt_sh_degree(), 0);
+}

@@ -29,6 +29,9 @@ pub struct RunArgs {
     /// Highest SH degree of training.
     #[arg(long, default_value_t = TrainConfig::default().sh_degree)]
     pub sh_degree: u32,
+    /// Training iterations between SH band increases (`cogeo train --sh-band-every`).
+    #[arg(long, default_value_t = TrainConfig::default().sh_band_every)]
+    pub sh_band_every: u32,
     /// Learn per-view exposure maps in training (`cogeo train --exposure`) and hand them to the
     /// removal (`cogeo remove --exposure`), for photos whose exposure or white balance varies.
     #[arg(long)]
@@ -54,6 +57,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     let device = a.device.command_line();
     let mut train = pipeline::train(&capture, &layout.train());
     train.extend(["--iters".into(), a.iters.to_string(), "--sh-degree".into(), a.sh_degree.to_string()]);
+    train.extend(["--sh-band-every".into(), a.sh_band_every.to_string()]);
     train.extend(["--checkpoint-every".into(), "0".into(), "--seed".into(), seed.clone()]);
     train.extend(["--background".into(), background]);
     if a.exposure {

@@ -100,7 +100,8 @@ impl GaussianScene {
     }
 
     /// The highest SH degree with a nonzero coefficient: the bands training reached (it grows
-    /// one band per 1000 iterations and leaves the others exactly zero).
+    /// one band per `--sh-band-every` iterations, 1000 by default, and leaves the others exactly
+    /// zero).
     pub fn learnt_sh_degree(&self) -> u32 {
         let k = self.sh_coeffs();
         (1..=self.sh_degree)

@@ -2,10 +2,11 @@
 //! loss and its gradient are computed, and the backward passes end in Adam updating every parameter
 //! group with its INRIA learning rate (conventions.md): inside the projection backward
 //! (train/fused.rs), or, for a trust-region step, on accumulated gradients per tensor. SH degree
-//! grows by one every 1000 iterations. Densification runs on the host every 100 iterations, carrying
-//! the Adam moments of surviving Gaussians: INRIA clone / split / prune with opacity resets
-//! (`Strategy::Adc`), or 3DGS-MCMC relocation and growth to the budget (`Strategy::Mcmc`,
-//! train/mcmc.rs, which also adds regularizer gradients before Adam and a noise pass after it).
+//! grows by one every `TrainConfig::sh_band_every` iterations (1000). Densification runs on the
+//! host every 100 iterations, carrying the Adam moments of surviving Gaussians: INRIA clone /
+//! split / prune with opacity resets (`Strategy::Adc`), or 3DGS-MCMC relocation and growth to the
+//! budget (`Strategy::Mcmc`, train/mcmc.rs, which also adds regularizer gradients before Adam and
+//! a noise pass after it).
 
 use super::adam::{Adam, Moments};
 use super::exposure::ViewExposures;
@@ -136,7 +137,7 @@ pub struct Trainer {
     /// rotations) is clipped to this Euclidean norm (a trust region per Gaussian).
     pub trust_radius: Option<f32>,
     /// Render with this SH degree from the first step (fine-tuning a trained scene) instead of
-    /// growing it one band per 1000 iterations.
+    /// growing it one band per `TrainConfig::sh_band_every` iterations.
     pub fixed_sh_degree: Option<u32>,
     /// Apply Adam inside the projection backward (train/fused.rs) instead of writing the parameter
     /// gradients and running Adam per tensor; on by default.
@@ -284,7 +285,7 @@ impl Trainer {
         if let Some(d) = self.fixed_sh_degree {
             return d.min(self.scene.sh_degree);
         }
-        (self.step / 1000).min(self.scene.sh_degree)
+        (self.step / self.cfg.sh_band_every.max(1)).min(self.scene.sh_degree)
     }
 
     fn next_view(&mut self, count: usize) -> usize {
