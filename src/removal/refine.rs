@@ -274,10 +274,11 @@ pub fn refine(
     let all = seen.iter().all(|&s| s) || !seen.iter().any(|&s| s);
     let part = if all { None } else { Some(scene.subset(&seen)) };
     let mut t = Trainer::new(gpu, &data, part.as_ref().unwrap_or(scene), tcfg)?;
-    // the bands the scene learnt, from the first step. A scene trained for fewer than 1000
-    // iterations has learnt only the DC band; rendering and stepping its zero bands as well made a
-    // refinement iteration dearer than a training one, and 150 iterations from zero added nothing
-    // (removal bench scenes and real composites within 0.1 dB either way)
+    // the bands the scene learnt, from the first step. A scene trained for fewer than
+    // `--sh-band-every` iterations (1000) has learnt only the DC band; rendering and stepping its
+    // zero bands as well made a refinement iteration dearer than a training one, and 150
+    // iterations from zero added nothing (removal bench scenes and real composites within 0.1 dB
+    // either way)
     t.fixed_sh_degree = Some(scene.learnt_sh_degree());
     if let Some(m) = masks {
         t.set_loss_masks(m)?;
