@@ -89,7 +89,9 @@ pub fn prepare(spec: &RealSpec, factor: &str, iters: &str, data: &Path) -> PathB
         Err(_) => (resampled_capture(spec, &shared, factor), 1),
     };
     let p = |x: &Path| x.to_string_lossy().into_owned();
-    let cache = crate::common::bench_cache().join(format!("{}-{}-d{factor}-i{iters}", spec.capture, spec.images));
+    let sh_every = cogeo::pipeline::capture_sh_band_every(iters.parse().expect("--real-iters is a number"));
+    let cache =
+        crate::common::bench_cache().join(format!("{}-{}-d{factor}-i{iters}-sh{sh_every}", spec.capture, spec.images));
     let scene = cache.join("scene.ply");
     if !scene.is_file() {
         eprintln!("training {} without objects into {} (cached for later runs)", spec.capture, cache.display());
@@ -325,7 +327,7 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
         "Removal on real photos with exact ground truth: virtual objects composited into the shared captures \
          (`cogeo synth --composite-into`, standing where `bench/real_placements/` says; statue `images_2`, cup \
          `images`, further downscaled by the row's `--real-downscale` (a factor that is not whole: the photos resampled); the row's number of training iterations of \
-         the capture without and with the objects; \"exposure\": the composite trained with `--exposure`, its maps handed to \
+         the capture without and with the objects, one more SH band every quarter of them; \"exposure\": the composite trained with `--exposure`, its maps handed to \
          the removal and the held-out views scored with `eval --fit-exposure`, as `--real-exposure` asks), \
          `cargo bench --bench removal -- --scenes real`, on {device}. Held-out views against the original photos: inside the removed objects' \
          silhouettes (mask), its parts that some training view saw (seen elsewhere) or none did (never seen), \
