@@ -1,0 +1,272 @@
+//! One scene of the removal bench (removal.rs): its composite or room trained and tagged (or a
+//! kept training reused), each variant removed and scored, a row per variant.
+
+use crate::common::{self, cogeo, read_json, s};
+use crate::{CAPTURE_CEILING, DISAGREEING, DISAGREEING_SEEDS, ONE_SOURCE, PERFECT_INPAINTING};
+use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+/// One scene's dataset and how to train, tag, remove and score on it.
+pub struct Training<'a> {
+    /// The scene's name and the labels it removes.
+    pub name: &'a str,
+    pub labels: &'a str,
+    pub data: &'a Path,
+    pub truth: &'a Path,
+    pub iters: &'a str,
+    pub lpips: &'a Option<String>,
+    pub fid: &'a Option<String>,
+    /// Train with `--exposure` and hand the learned maps to `cogeo remove`.
+    pub exposure: bool,
+    /// Score with `cogeo eval --fit-exposure` (captures whose views' exposure varies).
+    pub fit_exposure: bool,
+    /// Where trained and tagged scenes are kept between runs (`--reuse-composites`), one folder
+    /// per training seed; None trains and tags afresh.
+    pub reuse: Option<PathBuf>,
+    /// A real scene's capture trained without the objects (`CAPTURE_CEILING`); None for the synth
+    /// rooms, which skip that variant.
+    pub original: Option<&'a Path>,
+}
+
+impl Training<'_> {
+    /// A folder of completed views for `--inpainted`, view by view from the `--no-refine` runs of
+    /// the built-in fill with `seeds` (view i from seed i mod their count, in name order). The runs
+    /// are kept in `dir` for the next variant.
+    fn seed_inpaintings(&self, dir: &Path, tagged: &Path, seeds: &[u64]) -> PathBuf {
+        let capture = Capture::at(self.data);
+        let runs: Vec<PathBuf> = seeds
+            .iter()
+            .map(|seed| {
+                let out = dir.join(format!("fill_seed{seed}"));
+                if !out.join("inpainted").is_dir() {
+                    let mut a = pipeline::remove(tagged, &capture, Chosen::Labels(self.labels), &out);
+                    a.extend(s(&["--no-refine", "--seed", &seed.to_string()]));
+                    cogeo(&a);
+                }
+                out.join("inpainted")
+            })
+            .collect();
+        if let [one] = &runs[..] {
+            return one.clone();
+        }
+        let mixed =
+            dir.join(format!("inpainted_seeds_{}", seeds.iter().map(u64::to_string).collect::<Vec<_>>().join("_")));
+        std::fs::create_dir_all(&mixed).expect("cannot create the mixed inpaintings' folder");
+        let mut names: Vec<_> = std::fs::read_dir(&runs[0])
+            .expect("cannot read a fill's inpainted views")
+            .map(|e| e.expect("cannot read a folder entry").file_name())
+            .collect();
+        names.sort();
+        for (i, name) in names.iter().enumerate() {
+            std::fs::copy(runs[i % runs.len()].join(name), mixed.join(name)).expect("cannot copy an inpainted view");
+        }
+        mixed
+    }
+
+    /// `cogeo eval` of the held-out renders in `out/test_after` (made from `scene`) into
+    /// `out/metrics.json`.
+    fn score(&self, out: &Path, scene: &Path) {
+        let p = |x: &Path| x.to_string_lossy().into_owned();
+        let mut e = pipeline::eval(out, self.truth, &self.data.join("object_mask"), &out.join("metrics.json"));
+        e.extend(s(&["--labels", self.labels, "--data", &p(self.data), "--scene", &p(scene)]));
+        if let Some(m) = self.lpips {
+            e.extend(s(&["--lpips-model", m]));
+        }
+        if let Some(m) = self.fid {
+            e.extend(s(&["--fid-model", m]));
+        }
+        if self.fit_exposure {
+            e.push("--fit-exposure".into());
+        }
+        cogeo(&e);
+    }
+
+    /// `CAPTURE_CEILING`'s row: the `original` training rendered at the composite's cameras, its
+    /// held-out views (the dataset's test split) scored like a removal's. No removal ran: no
+    /// time, no Gaussian counts; the training fields and the device are the original's.
+    fn ceiling_row(&self, original: &Path, out: &Path) -> Value {
+        let p = |x: &Path| x.to_string_lossy().into_owned();
+        let all = out.join("all_views");
+        cogeo(&s(&["render", "--scene", &p(original), "--colmap", &p(self.data), "--out", &p(&all)]));
+        let held_out = out.join("test_after");
+        std::fs::create_dir_all(&held_out).expect("cannot create the ceiling's test_after");
+        // the held-out views are the dataset's split of the model's cameras (no photo need load)
+        let model = cogeo::scene::dataset::read_capture(self.data).expect("the composite's model reads");
+        for (_, cam) in model.cameras.iter().enumerate().filter(|(i, _)| cogeo::scene::dataset::is_test_view(*i)) {
+            let name = format!("{}.png", cam.name);
+            std::fs::copy(all.join(&name), held_out.join(&name)).expect("cannot copy a held-out render");
+        }
+        self.score(out, original);
+        // the training is the original's (its own seed); `cogeo render` names no device: the one
+        // that training ran on
+        let trained = read_json(&original.with_file_name("metrics.json"));
+        json!({
+            "scene": self.name, "removed_labels": self.labels, "variant": CAPTURE_CEILING, "training_seed": Value::Null,
+            "exposure": self.exposure, "train_test_psnr_exposure_fitted": trained["test"]["psnr_exposure_fitted"],
+            "device": trained["device"], "train_test_psnr": trained["test"]["psnr"],
+            "metrics": read_json(&out.join("metrics.json")), "stage_seconds": Value::Null, "total_seconds": Value::Null,
+            "peak_rss_mib": Value::Null, "gaussians": Value::Null, "background_psnr_vs_original": Value::Null,
+        })
+    }
+
+    /// Trains the composite with `seed` into `dir` and tags it by each of `methods`, or copies a
+    /// kept training and taggings (`reuse`) that hold them all.
+    fn train_and_tag(&self, dir: &Path, seed: u64, methods: &[&str]) {
+        let layout = Layout { out: dir };
+        let capture = Capture::at(self.data);
+        let tagged_name = |method: &str| format!("tagged_{method}.ply");
+        // a kept training is reused only when it holds every tagging the variants ask for
+        let kept = self.reuse.as_ref().map(|r| r.join(format!("seed{seed}")));
+        let reusable = kept.as_ref().filter(|k| {
+            k.join("train/scene.ply").is_file() && methods.iter().all(|m| k.join(tagged_name(m)).is_file())
+        });
+        if let Some(k) = reusable {
+            eprintln!("{}: reusing the training and tagging kept in {}", self.name, k.display());
+            copy_tree(&k.join("train"), &layout.train());
+            for m in methods {
+                std::fs::copy(k.join(tagged_name(m)), dir.join(tagged_name(m))).expect("cannot copy a kept tagging");
+            }
+        } else {
+            let mut train_args = pipeline::train(&capture, &layout.train());
+            // a composite trains as its capture did (removal_real::prepare), a synth room as the
+            // synth rooms do
+            train_args.extend(match self.original {
+                Some(_) => pipeline::capture_training(self.iters, Some(seed)),
+                None => pipeline::synth_training(self.iters.parse().expect("--iters is a number"), seed),
+            });
+            if self.exposure {
+                train_args.push("--exposure".into());
+            }
+            cogeo(&train_args);
+            for method in methods {
+                let tagged = dir.join(tagged_name(method));
+                cogeo(&pipeline::tag(
+                    &layout.trained_scene(),
+                    &capture,
+                    Objects::Masks("object_mask"),
+                    Some(method),
+                    &tagged,
+                ));
+            }
+            if let Some(k) = &kept {
+                common::make_folder(k, |partial| {
+                    copy_tree(&layout.train(), &partial.join("train"));
+                    for m in methods {
+                        std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
+                            .expect("cannot keep a tagging");
+                    }
+                });
+                eprintln!("{}: training and tagging kept in {}", self.name, k.display());
+            }
+        }
+    }
+
+    /// Trains the scene with `seed` into `dir`, tags it, runs each variant and scores it: one row per
+    /// variant, with the device and the training's seed and test PSNR.
+    pub fn variants(&self, dir: &Path, seed: u64, variants: &[(&str, &str, &[&str])]) -> Vec<Value> {
+        let p = |x: &Path| x.to_string_lossy().into_owned();
+        let data = self.data;
+        let layout = Layout { out: dir };
+        let capture = Capture::at(data);
+        // the ceiling removes nothing: it needs neither the composite's training nor a tagging
+        let mut methods: Vec<&str> = variants.iter().filter(|v| v.0 != CAPTURE_CEILING).map(|v| v.1).collect();
+        methods.sort();
+        methods.dedup();
+        let train_metrics = if methods.is_empty() {
+            Value::Null
+        } else {
+            self.train_and_tag(dir, seed, &methods);
+            read_json(&layout.train().join("metrics.json"))
+        };
+        let mut rows = Vec::new();
+        for (k, (variant, method, extra)) in variants.iter().enumerate() {
+            let out = dir.join(format!("variant_{k}"));
+            if *variant == CAPTURE_CEILING {
+                let Some(original) = self.original else { continue };
+                rows.push(self.ceiling_row(original, &out));
+                continue;
+            }
+            let tagged = dir.join(format!("tagged_{method}.ply"));
+            // the one-source variant runs once per seed, each seed's fill a consistent source of its
+            // own; the others once
+            let sources: Vec<Option<&[u64]>> = match *variant {
+                ONE_SOURCE => DISAGREEING_SEEDS.iter().map(|seed| Some(std::slice::from_ref(seed))).collect(),
+                DISAGREEING => vec![Some(&DISAGREEING_SEEDS[..])],
+                _ => vec![None],
+            };
+            let mut runs = Vec::new();
+            for (r, seeds) in sources.iter().enumerate() {
+                let out = if sources.len() > 1 { dir.join(format!("variant_{k}_run{r}")) } else { out.clone() };
+                let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(self.labels), &out);
+                a.extend(s(extra));
+                if *variant == PERFECT_INPAINTING {
+                    a.extend(s(&["--inpainted", &p(self.truth)]));
+                }
+                if let Some(seeds) = seeds {
+                    a.extend(s(&["--inpainted", &p(&self.seed_inpaintings(dir, &tagged, seeds))]));
+                }
+                if self.exposure {
+                    a.extend(s(&["--exposure", &p(&layout.exposure())]));
+                }
+                cogeo(&a);
+                self.score(&out, &out.join("scene.ply"));
+                let report = read_json(&out.join("report.json"));
+                let m = read_json(&out.join("metrics.json"));
+                runs.push(json!({
+                    "scene": self.name, "removed_labels": self.labels, "variant": variant, "training_seed": seed,
+                    "exposure": self.exposure, "train_test_psnr_exposure_fitted": train_metrics["test"]["psnr_exposure_fitted"],
+                    "device": report["device"], "train_test_psnr": train_metrics["test"]["psnr"],
+                    "metrics": m, "stage_seconds": report["seconds"], "total_seconds": report["total_seconds"],
+                    "peak_rss_mib": report["peak_rss_mib"], "gaussians": report["gaussians"],
+                    "background_psnr_vs_original": report["background_psnr_vs_original"]["mean"],
+                }));
+            }
+            rows.push(median_run(runs, seeds_of(&sources)));
+        }
+        rows
+    }
+}
+
+/// The seeds of each run of a variant, for its row.
+fn seeds_of(sources: &[Option<&[u64]>]) -> Vec<Value> {
+    sources.iter().map(|s| s.map_or(Value::Null, |s| json!(s))).collect()
+}
+
+/// A variant's row: its one run, or of several runs (the one-source variant, a run per seed) the
+/// one of median masked LPIPS, with every run's seeds, masked PSNR and LPIPS beside it
+/// (`single_source_runs`): one seed's fill can be luckier than another's by more than the
+/// disagreeing inpaintings' yardstick allows (statue-two-of-three, seeds 0-3: masked LPIPS 0.210
+/// / 0.199 / 0.225 / 0.204), so the yardstick compares with the typical single source, not with
+/// one seed's.
+fn median_run(mut runs: Vec<Value>, seeds: Vec<Value>) -> Value {
+    if runs.len() == 1 {
+        return runs.pop().expect("one run");
+    }
+    let lpips = |r: &Value| r["metrics"]["lpips"]["mask"].as_f64().unwrap_or(f64::NAN);
+    let each: Vec<Value> = runs
+        .iter()
+        .zip(seeds)
+        .map(|(r, seeds)| json!({"seeds": seeds, "mask_psnr": r["metrics"]["mask"]["psnr"], "mask_lpips": r["metrics"]["lpips"]["mask"]}))
+        .collect();
+    let mut order: Vec<usize> = (0..runs.len()).collect();
+    order.sort_by(|&a, &b| lpips(&runs[a]).total_cmp(&lpips(&runs[b])));
+    let mut row = runs.swap_remove(order[order.len() / 2]);
+    row["single_source_runs"] = json!(each);
+    row
+}
+
+/// Copies the folder `from` (files and subfolders) to `to`, which is created.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap_or_else(|e| panic!("cannot create {}: {e}", to.display()));
+    for entry in std::fs::read_dir(from).unwrap_or_else(|e| panic!("cannot read {}: {e}", from.display())) {
+        let entry = entry.expect("cannot read a folder entry");
+        let target = to.join(entry.file_name());
+        if entry.file_type().expect("cannot stat a folder entry").is_dir() {
+            copy_tree(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), &target)
+                .unwrap_or_else(|e| panic!("cannot copy {} to {}: {e}", entry.path().display(), target.display()));
+        }
+    }
+}
