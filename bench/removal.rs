@@ -2,7 +2,8 @@
 //! removed at once), each trained and tagged once, then removed with the full pipeline and with
 //! each ablation / baseline. Scored on the held-out views against the exact object-free ground
 //! truth with `cogeo eval`. Beside them, real-photo scenes (removal_real.rs): objects composited
-//! into the shared captures, whose original photos are the ground truth.
+//! into the shared captures, whose original photos are the ground truth. One scene's training,
+//! variants and scoring are removal_training.rs.
 //!
 //!   cargo bench --bench removal [-- --scenes one,two-of-three,three-of-four --iters 500
 //!                                  --width 160 --height 120 --views 16 --supersample 1 --repeat-full
