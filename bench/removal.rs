@@ -305,14 +305,15 @@ fn main() {
             num(&mean(&|m| m["bbox"]["psnr"].as_f64()), 2)
         );
     }
-    md += "\nSeconds per stage of the full pipeline:\n\n| scene | select | masks | complete | photo depth | transfer | fuse | refine | render |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    md += "\nSeconds per stage of the full pipeline:\n\n| scene | select | masks | hull | complete | photo depth | transfer | fuse | refine | render |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for r in rows.iter().filter(|r| r["variant"] == "cogeo (full)") {
         let t = &r["stage_seconds"];
         md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             r["scene"].as_str().unwrap(),
             num(&t["select"], 2),
             num(&t["masks"], 2),
+            num(&t["hull"], 2),
             num(&t["complete"], 2),
             num(&t["photo_depth"], 2),
             num(&t["transfer"], 2),
