@@ -6,6 +6,12 @@ use cogeo::rng::Rng;
 use cogeo::scene::GaussianScene;
 use std::path::PathBuf;
 
+/// The stages of `cogeo remove`'s report (`seconds`), in pipeline order: the stage tables of the
+/// removal and removal_speed benches. A binary older than a stage reads no time for it (`hull` is
+/// from 2026-11-29).
+pub const REMOVAL_STAGES: [&str; 9] =
+    ["select", "masks", "hull", "complete", "photo_depth", "transfer", "fuse", "refine", "render"];
+
 /// Arguments after `cargo bench --bench NAME --`; cargo's own `--bench` flag is ignored.
 pub fn args() -> Vec<String> {
     std::env::args().skip(1).filter(|a| a != "--bench").collect()

@@ -305,22 +305,19 @@ fn main() {
             num(&mean(&|m| m["bbox"]["psnr"].as_f64()), 2)
         );
     }
-    md += "\nSeconds per stage of the full pipeline:\n\n| scene | select | masks | hull | complete | photo depth | transfer | fuse | refine | render |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    let stages = common::REMOVAL_STAGES;
+    md += "\nSeconds per stage of the full pipeline:\n\n| scene |";
+    for stage in stages {
+        md += &format!(" {} |", stage.replace('_', " "));
+    }
+    md += &format!("\n|---|{}\n", "---:|".repeat(stages.len()));
     for r in rows.iter().filter(|r| r["variant"] == "cogeo (full)") {
-        let t = &r["stage_seconds"];
-        md += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
-            r["scene"].as_str().unwrap(),
-            num(&t["select"], 2),
-            num(&t["masks"], 2),
-            num(&t["hull"], 2),
-            num(&t["complete"], 2),
-            num(&t["photo_depth"], 2),
-            num(&t["transfer"], 2),
-            num(&t["fuse"], 2),
-            num(&t["refine"], 1),
-            num(&t["render"], 2)
-        );
+        md += &format!("| {} |", r["scene"].as_str().unwrap());
+        for stage in stages {
+            let digits = if stage == "refine" { 1 } else { 2 };
+            md += &format!(" {} |", num(&r["stage_seconds"][stage], digits));
+        }
+        md += "\n";
     }
     if retrain > 0 {
         md += &format!(

@@ -23,11 +23,6 @@ use cogeo::scene::GaussianScene;
 use cogeo::train::trainer::{TrainConfig, Trainer};
 use std::path::{Path, PathBuf};
 
-/// The stages of `cogeo remove`'s report, in pipeline order.
-/// (A binary older than a stage reads 0 s for it: `hull` is from 2026-11-29.)
-const STAGES: [&str; 9] =
-    ["select", "masks", "hull", "complete", "photo_depth", "transfer", "fuse", "refine", "render"];
-
 /// The capture, its images, masks and training, as the speed issue specifies the scene.
 const CAPTURE: &str = "statue";
 const IMAGES: &str = "images_2";
@@ -253,8 +248,10 @@ fn table(
         },
         if baseline { "|---|---:|---:|---:|---:|---|" } else { "|---|---:|---:|---|" },
     );
-    let mut rows: Vec<(String, Vec<Vec<f64>>)> =
-        STAGES.iter().map(|s| (s.to_string(), (0..binaries.len()).map(|b| stage(b, s)).collect())).collect();
+    let mut rows: Vec<(String, Vec<Vec<f64>>)> = common::REMOVAL_STAGES
+        .iter()
+        .map(|s| (s.to_string(), (0..binaries.len()).map(|b| stage(b, s)).collect()))
+        .collect();
     rows.push(("**total (wall)**".into(), (0..binaries.len()).map(walls).collect()));
     for (name, per_binary) in rows {
         let this = common::median(per_binary[0].clone());
