@@ -7,7 +7,8 @@
 mod common;
 
 use cogeo::removal::hull::{leftovers_inside, remove_leftovers_inside, HullConfig};
-use cogeo::removal::select::{hole_masks, select_gaussians, HoleConfig};
+use cogeo::removal::select::{hole_masks, select_gaussians, splat_window, HoleConfig, MaskedView};
+use cogeo::render::reference::render_reference;
 use cogeo::scene::{logit, Camera, GaussianScene, SH_C0};
 
 /// Where a Gaussian of the scene belongs.
@@ -154,4 +155,61 @@ fn the_missed_gaussians_of_a_removed_box_go_and_the_floor_under_it_stays() {
         })
         .count();
     assert!(in_every_hole * 2 >= floor_under, "{in_every_hole} of {floor_under} floor Gaussians in every hole");
+    // the rounds draw the holes again only where the Gaussians taken blend: the same holes and
+    // renders as drawing every view anew for the final selection
+    let anew = hole_masks(&gpu, &scene, &peeled, &cams, &holes, &mut |_, _| {}).unwrap();
+    for (k, (redrawn, fresh)) in remasked.iter().zip(&anew).enumerate() {
+        same_view(k, redrawn, fresh);
+    }
+}
+
+/// Two drawings of one view's hole agree: masks exactly, renders to float rounding. (A window's
+/// render moves the principal point: where a pixel's transmittance ends near 1e-4, or a Gaussian
+/// blends near alpha 1/255, that rounding can flip one Gaussian in or out; one pixel of the box's
+/// eight views does, by 1e-3.)
+fn same_view(k: usize, a: &MaskedView, b: &MaskedView) {
+    assert!(a.hole == b.hole && a.fill == b.fill && a.footprint == b.footprint, "view {k}: masks differ");
+    let channels = [
+        ("rgb before", &a.before.rgb, &b.before.rgb),
+        ("removed weight", &a.before.weight, &b.before.weight),
+        ("rgb after removal", &a.after_removal.rgb, &b.after_removal.rgb),
+        ("alpha after removal", &a.after_removal.alpha, &b.after_removal.alpha),
+        ("depth after removal", &a.after_removal.depth, &b.after_removal.depth),
+        ("kept weight", &a.after_removal.weight, &b.after_removal.weight),
+    ];
+    for (name, x, y) in channels {
+        assert_eq!(x.len(), y.len(), "view {k}: {name}");
+        let worst = x.iter().zip(y.iter()).map(|(p, q)| (p - q).abs()).fold(0f32, f32::max);
+        let off = x.iter().zip(y.iter()).filter(|(p, q)| (*p - *q).abs() > 1e-4).count();
+        assert!(worst <= 1e-2 && off * 1000 <= x.len(), "view {k}: {name}: {off} values off, by up to {worst}");
+    }
+}
+
+/// `splat_window` holds every pixel where the marked Gaussians blend, by the dense f64
+/// reference (every Gaussian at every pixel), and not much more.
+#[test]
+fn the_splat_window_holds_every_pixel_the_marked_gaussians_blend() {
+    let (scene, parts) = scene();
+    let marked: Vec<bool> = parts.iter().map(|p| matches!(p, Part::Missed(_))).collect();
+    let feature: Vec<f32> = marked.iter().map(|&m| m as u8 as f32).collect();
+    for cam in cameras().iter().step_by(3) {
+        let (w, h) = (cam.width as usize, cam.height as usize);
+        let reference = render_reference(&scene, cam, [0.0; 3], 0.01, 0, Some((&feature, 1)));
+        let blended: Vec<bool> = reference.features.iter().map(|&f| f > 0.0).collect();
+        let tight = cogeo::image_ops::bounding_box(&blended, w).expect("the missed Gaussians are in view");
+        let window = splat_window(&scene, &marked, cam).expect("a window");
+        for p in (0..w * h).filter(|&p| blended[p]) {
+            let (x, y) = (p % w, p / w);
+            assert!(
+                (window.x0..window.x1).contains(&x) && (window.y0..window.y1).contains(&y),
+                "{} ({x}, {y})",
+                cam.name
+            );
+        }
+        // a pixel of float32 margin each side, and the supports' boxes around their ellipses
+        let (gw, gh) = (window.width() - tight.width(), window.height() - tight.height());
+        assert!(gw <= 8 && gh <= 8, "{}: window {window:?} around {tight:?}", cam.name);
+    }
+    // none marked, none in view: no window
+    assert!(splat_window(&scene, &vec![false; scene.len()], &cameras()[0]).is_none());
 }

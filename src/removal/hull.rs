@@ -21,7 +21,7 @@
 //! an object's near side hide those on its far side, so the holes are drawn again without the
 //! ones found and the far side judged then, up to ROUNDS times.
 
-use super::select::{hole_masks, select_gaussians, HoleConfig, MaskedView, Selection};
+use super::select::{redraw_hole_masks, select_gaussians, HoleConfig, MaskedView, Selection};
 use crate::gpu::Gpu;
 use crate::planes::Plane;
 use crate::removal::complete::surfaces::{surfaces_around, Surfaces};
@@ -100,7 +100,11 @@ pub fn leftovers_inside(
     if cfg.share <= 0.0 {
         return inside;
     }
-    let surfaces: Vec<Option<ViewSurfaces>> = masked.iter().zip(cameras).map(|(v, c)| ViewSurfaces::of(v, c)).collect();
+    // each view's planes are a RANSAC fit of its own: the views' fits spread over the cores
+    let mut surfaces: Vec<Option<ViewSurfaces>> = masked.iter().map(|_| None).collect();
+    crate::parallel::for_each_item(&mut surfaces, &mut |_, _| {}, |k, s| {
+        *s = ViewSurfaces::of(&masked[k], &cameras[k])
+    });
     let judge = |i: usize| {
         let m = scene.means[i].map(f64::from);
         let (mut seen, mut in_hole, mut on_surface) = (0usize, 0usize, 0usize);
@@ -144,7 +148,7 @@ pub fn remove_leftovers_inside(
     holes: &HoleConfig,
     cfg: &HullConfig,
     selection: &mut Selection,
-    masked: &mut Vec<MaskedView>,
+    masked: &mut [MaskedView],
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<usize> {
     let mut relabelled = labels.to_vec();
@@ -158,7 +162,7 @@ pub fn remove_leftovers_inside(
         taken += found;
         inside.iter().zip(&mut relabelled).filter(|(&g, _)| g).for_each(|(_, l)| *l = chosen[0]);
         *selection = select_gaussians(scene, &relabelled, chosen)?;
-        *masked = hole_masks(gpu, scene, selection, cameras, holes, progress)?;
+        redraw_hole_masks(gpu, scene, selection, &inside, cameras, holes, masked, progress)?;
     }
     Ok(taken)
 }

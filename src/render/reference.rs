@@ -24,6 +24,19 @@ pub struct ProjectedGaussian {
     pub color: [f64; 3],
 }
 
+impl ProjectedGaussian {
+    /// The box [x0, x1] x [y0, y1] of image points where this Gaussian can blend: its ellipse of
+    /// alpha >= 1/255 (conventions.md); None when its opacity is below 1/255.
+    pub fn support(&self) -> Option<[f64; 4]> {
+        let r2 = 2.0 * (255.0 * self.opacity).ln();
+        if r2.is_nan() || r2 < 0.0 {
+            return None;
+        }
+        let (hx, hy) = ((r2 * self.cov2d[0]).sqrt(), (r2 * self.cov2d[2]).sqrt());
+        Some([self.xy[0] - hx, self.xy[0] + hx, self.xy[1] - hy, self.xy[1] + hy])
+    }
+}
+
 pub struct ReferenceImage {
     pub width: u32,
     pub height: u32,
