@@ -183,6 +183,16 @@ fn bad_inputs_fail_with_one_clear_line_and_write_nothing() {
         &out,
         "f_obj",
     );
+    // a zero band interval is refused at the flag, by `run` as by the `train` it launches
+    for cmd in ["train", "run"] {
+        let mut args = vec![cmd, "--data", s(&dir), "--out", s(&out), "--sh-band-every", "0"];
+        if cmd == "run" {
+            args.extend(["--masks", s(&dir)]);
+        }
+        let (code, err) = cogeo(&args);
+        assert!(code != 0 && err.contains("--sh-band-every") && err.contains("0 is not in 1.."), "{cmd}: {err}");
+        assert!(!out.exists(), "{cmd} wrote {}", out.display());
+    }
 }
 
 #[test]

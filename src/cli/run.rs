@@ -30,7 +30,8 @@ pub struct RunArgs {
     #[arg(long, default_value_t = TrainConfig::default().sh_degree)]
     pub sh_degree: u32,
     /// Training iterations between SH band increases (`cogeo train --sh-band-every`).
-    #[arg(long, default_value_t = TrainConfig::default().sh_band_every)]
+    #[arg(long, default_value_t = TrainConfig::default().sh_band_every,
+          value_parser = clap::value_parser!(u32).range(1..))]
     pub sh_band_every: u32,
     /// Learn per-view exposure maps in training (`cogeo train --exposure`) and hand them to the
     /// removal (`cogeo remove --exposure`), for photos whose exposure or white balance varies.
