@@ -483,6 +483,72 @@ fn color_transfer_maps_a_source_photos_exposure_to_the_targets() {
     assert!(checked > 500, "{checked} pixels checked");
 }
 
+/// Two sources see a wall from either side, each with its own tint of the target's colors (the
+/// light a glossy surface sends their way: +0.1 / -0.05 / +0.03 and -0.08 / +0.06 / 0), the
+/// nearer one only the hole's right half, and the target's own photo shows the wall only around
+/// the hole (no own pixel inside to match locally): each source's colors are matched to the
+/// target's over the points around the hole that both saw (`source_offsets`), so the whole hole
+/// takes the target's colors (to 2e-3), not the patchwork of the two tints.
+#[test]
+fn color_transfer_matches_each_sources_tint_around_the_hole() {
+    use cogeo::removal::complete::source_views::SourceView;
+    use cogeo::removal::complete::transfer::transfer;
+    use cogeo::scene::exposure::ColorAffine;
+    use cogeo::scene::Camera;
+    let (w, h) = (60usize, 40usize);
+    let cam = |name: &str, x: f64| {
+        Camera::look_at(name, w as u32, h as u32, 60.0, [x, 0.0, 0.0], [x, 0.0, 5.0], [0.0, -1.0, 0.0])
+    };
+    let cams = [cam("t", 0.0), cam("left", -0.6), cam("right", 0.4)];
+    let color = |p: [f64; 3]| [0.4 + 0.1 * p[0], 0.45 + 0.1 * p[1], 0.35 + 0.05 * p[0]];
+    let tints = [[0.0; 3], [0.1, -0.05, 0.03], [-0.08, 0.06, 0.0]];
+    let photos: Vec<Vec<f32>> = cams
+        .iter()
+        .zip(tints)
+        .map(|(c, tint)| {
+            let mut img = vec![0f32; 3 * w * h];
+            for p in 0..w * h {
+                let rgb = color(c.pixel_point(p % w, p / w, 5.0));
+                (0..3).for_each(|k| img[k * w * h + p] = (rgb[k] + tint[k]) as f32);
+            }
+            img
+        })
+        .collect();
+    // the hole, and the target's footprint: all of it (the objects covered it in its photo)
+    let hole: Vec<bool> = (0..w * h).map(|p| (22..38).contains(&(p % w)) && (12..28).contains(&(p / w))).collect();
+    // the nearer source, on the right, had the objects over the hole's left half: the left
+    // source fills that half
+    let left_half = |q: usize, c: &Camera| {
+        let world = c.pixel_point(q % w, q / w, 5.0);
+        let in_hole = cams[0].pixel_of(world).is_some_and(|(t, _)| hole[t]);
+        world[0] < 0.0 && in_hole
+    };
+    let covered = [hole.clone(), vec![false; w * h], (0..w * h).map(|q| left_half(q, &cams[2])).collect()];
+    let (depth, alpha) = (vec![5.0f32; w * h], vec![1.0f32; w * h]);
+    let sources: Vec<SourceView> = (0..3)
+        .map(|i| SourceView {
+            camera: &cams[i],
+            photo: &photos[i],
+            hole: &covered[i],
+            depth: &depth,
+            alpha: &alpha,
+            photo_colors: ColorAffine::IDENTITY,
+        })
+        .collect();
+    let t = transfer(0, &cams[0], &depth, &hole, &sources, 0.05);
+    let mut checked = 0;
+    for p in (0..w * h).filter(|&p| hole[p]) {
+        assert!(t.found[p], "pixel {p}: both sources saw it");
+        let want = color(cams[0].pixel_point(p % w, p / w, 5.0));
+        for k in 0..3 {
+            let got = t.rgb[k * w * h + p] as f64;
+            assert!((got - want[k]).abs() < 2e-3, "pixel {p} channel {k}: {got} vs the target's {}", want[k]);
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 16 * 16);
+}
+
 #[test]
 fn photo_consistent_depth_undoes_a_biased_hole_depth() {
     use cogeo::removal::complete::photo_depth::correct_hole_depth;
