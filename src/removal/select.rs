@@ -242,8 +242,8 @@ pub fn hole_masks(
 }
 
 /// Stage 2 again, for `selection` after the Gaussians `taken` (of `scene`; the selection `masked`
-/// was drawn for kept them) joined the removed ones, as the hull (`hull.rs`) does round after round: the
-/// views `hole_masks` draws for `selection`, rendered only where `taken` can blend
+/// was drawn for kept them) joined the removed ones, as the hull (`hull.rs`) does round after
+/// round: the views `hole_masks` draws for `selection`, rendered only where `taken` can blend
 /// (`splat_window`, grown by the hole's dilation), the rest kept from `masked`. Elsewhere neither
 /// render changes. (On the statue `images_2` each of the hull's three rounds drew every view
 /// again in 5.6 s; in windows of a quarter of the view, 2.1-2.7 s.)
