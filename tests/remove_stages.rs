@@ -540,9 +540,9 @@ fn color_transfer_matches_each_sources_tint_around_the_hole() {
     for p in (0..w * h).filter(|&p| hole[p]) {
         assert!(t.found[p], "pixel {p}: both sources saw it");
         let want = color(cams[0].pixel_point(p % w, p / w, 5.0));
-        for k in 0..3 {
+        for (k, &wk) in want.iter().enumerate() {
             let got = t.rgb[k * w * h + p] as f64;
-            assert!((got - want[k]).abs() < 2e-3, "pixel {p} channel {k}: {got} vs the target's {}", want[k]);
+            assert!((got - wk).abs() < 2e-3, "pixel {p} channel {k}: {got} vs the target's {wk}");
         }
         checked += 1;
     }
