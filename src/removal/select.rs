@@ -13,7 +13,7 @@
 //!    (`complete::depth::see_through`).
 
 use crate::gpu::Gpu;
-use crate::image_ops::{bounding_box, dilate, Rect};
+use crate::image_ops::{bounding_box, dilate, including, Rect};
 use crate::removal::refine::window_camera;
 use crate::render::reference::project;
 use crate::render::{RenderSettings, SceneRenderer};
@@ -211,11 +211,7 @@ pub fn hole_masks(
     cfg: &HoleConfig,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<MaskedView>> {
-    let mut original = ViewRenderer::new(gpu, scene, Some(&selection.removed))?;
-    // a scene without kept objects needs no weight of theirs: the feature blend was 40 % of a
-    // render on the statue (`Rendered::weight` is then zero everywhere)
-    let kept = selection.kept_objects.iter().any(|&k| k).then_some(&selection.kept_objects[..]);
-    let mut remaining = ViewRenderer::new(gpu, &selection.background, kept)?;
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection)?;
     let mut views = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
@@ -232,13 +228,36 @@ pub fn hole_masks(
             Some(window) => remaining.render_within(cam, window, cfg.background, &before)?,
             None => remaining.render(cam, cfg.background)?,
         };
-        let fill: Vec<bool> =
-            (0..w * h).map(|p| hole[p] && !after_removal.kept_object_covers(p, cfg.keep_alpha)).collect();
-        let footprint = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, 1.0);
+        let (fill, footprint) = fill_and_footprint(&before, &after_removal, &hole, cfg, w, h);
         views.push(MaskedView { before, after_removal, hole, fill, footprint, keep_alpha: cfg.keep_alpha });
         progress(i + 1, cameras.len());
     }
     Ok(views)
+}
+
+/// The renderers of stage 2: the original scene with the removed Gaussians' weight, and the
+/// scene after removal with the kept objects' weight. A scene without kept objects needs no
+/// weight of theirs: the feature blend was 40 % of a render on the statue (`Rendered::weight` is
+/// then zero everywhere).
+fn view_renderers(gpu: &Gpu, scene: &GaussianScene, selection: &Selection) -> Result<(ViewRenderer, ViewRenderer)> {
+    let original = ViewRenderer::new(gpu, scene, Some(&selection.removed))?;
+    let kept = selection.kept_objects.iter().any(|&k| k).then_some(&selection.kept_objects[..]);
+    Ok((original, ViewRenderer::new(gpu, &selection.background, kept)?))
+}
+
+/// The part of a `w` x `h` view's `hole` to synthesize (all of it but where a kept object covers
+/// it in the render `after_removal`) and the objects' own footprint (from the removed weight of
+/// the render `before`): stage 2's masks beside the hole.
+fn fill_and_footprint(
+    before: &Rendered,
+    after_removal: &Rendered,
+    hole: &[bool],
+    cfg: &HoleConfig,
+    w: usize,
+    h: usize,
+) -> (Vec<bool>, Vec<bool>) {
+    let fill = (0..w * h).map(|p| hole[p] && !after_removal.kept_object_covers(p, cfg.keep_alpha)).collect();
+    (fill, hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, 1.0))
 }
 
 /// Stage 2 again, for `selection` after the Gaussians `taken` (of `scene`; the selection `masked`
@@ -258,9 +277,7 @@ pub fn redraw_hole_masks(
     masked: &mut [MaskedView],
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<()> {
-    let mut original = ViewRenderer::new(gpu, scene, Some(&selection.removed))?;
-    let kept = selection.kept_objects.iter().any(|&k| k).then_some(&selection.kept_objects[..]);
-    let mut remaining = ViewRenderer::new(gpu, &selection.background, kept)?;
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection)?;
     let grow = cfg.dilate.max(0.0).ceil() as usize + 1;
     for (i, (cam, view)) in cameras.iter().zip(masked.iter_mut()).enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
@@ -270,9 +287,7 @@ pub fn redraw_hole_masks(
             view.after_removal.paste(window, &remaining.render(&part_camera, cfg.background)?, w);
             let before = &view.before;
             view.hole = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, cfg.dilate);
-            view.footprint = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, 1.0);
-            let a = &view.after_removal;
-            view.fill = (0..w * h).map(|p| view.hole[p] && !a.kept_object_covers(p, cfg.keep_alpha)).collect();
+            (view.fill, view.footprint) = fill_and_footprint(before, &view.after_removal, &view.hole, cfg, w, h);
         }
         progress(i + 1, cameras.len());
     }
@@ -293,16 +308,10 @@ pub fn splat_window(scene: &GaussianScene, marked: &[bool], camera: &Camera) -> 
         if px1 < 0.0 || py1 < 0.0 || px0 > w - 1.0 || py0 > h - 1.0 {
             continue;
         }
-        let r = Rect {
-            x0: px0.max(0.0) as usize,
-            y0: py0.max(0.0) as usize,
-            x1: (px1.min(w - 1.0) as usize) + 1,
-            y1: (py1.min(h - 1.0) as usize) + 1,
-        };
-        window = Some(match window {
-            None => r,
-            Some(o) => Rect { x0: o.x0.min(r.x0), y0: o.y0.min(r.y0), x1: o.x1.max(r.x1), y1: o.y1.max(r.y1) },
-        });
+        // the corners' pixels, inclusive
+        let (x0, y0) = (px0.max(0.0) as usize, py0.max(0.0) as usize);
+        let (x1, y1) = (px1.min(w - 1.0) as usize, py1.min(h - 1.0) as usize);
+        window = Some(including(Some(including(window, x0, y0)), x1, y1));
     }
     window
 }
