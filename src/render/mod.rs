@@ -4,7 +4,9 @@
 //! features (blend_features.comp). `reference` is the dense f64 CPU twin the tests check against.
 
 pub mod backward;
+mod blend_layout;
 mod features;
+mod moved;
 pub mod params;
 pub mod reference;
 mod scene_renderer;
@@ -17,6 +19,7 @@ use crate::sort::{self, scan, RadixSort};
 use anyhow::{bail, Result};
 use features::FeaturePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
+pub use blend_layout::BlendLayout;
 pub use scene_renderer::{render_rgb, SceneRenderer};
 use specialized::SpecializedPipelines;
 
@@ -212,45 +215,6 @@ pub struct Rasterizer {
 /// Capacity to allocate for `n` elements: headroom so growing scenes do not reallocate every time.
 pub(crate) fn grow(n: u64) -> u64 {
     (n + n / 4).max(1024)
-}
-
-/// Pixels per invocation of the blend passes on one device. An invocation owns a block of a 16x16
-/// tile, so it reads each Gaussian from shared memory once for the block (forward) and shares a
-/// Gaussian's subgroup reductions and atomics over it (backward). Each count is 1, 2, 4, 8 or 16.
-#[derive(Clone, Copy, Debug)]
-pub struct BlendLayout {
-    /// blend.comp: a column of this many rows.
-    pub forward_rows: u32,
-    /// blend_backward: a block of rows x columns.
-    pub backward_rows: u32,
-    pub backward_cols: u32,
-    /// blend_features_backward: a column of this many rows.
-    pub feature_rows: u32,
-}
-
-impl BlendLayout {
-    /// One pixel per invocation: the INRIA and gsplat layout.
-    pub const PIXEL: BlendLayout = BlendLayout { forward_rows: 1, backward_rows: 1, backward_cols: 1, feature_rows: 1 };
-
-    /// The layout for this device. Measured on llvmpipe with the subgroup-fed blends (a trained 31.5k
-    /// scene at 256x192, ms per pass, repeated runs): forward rows 2/4/8/16 took 216/149/106-132/71-100;
-    /// the color backward with 4 x 2, 8 x 1, 8 x 2, 16 x 1 and 16 x 2 pixels 201/206/123/155/95-161
-    /// (one pixel per invocation: 437 and 895). GPUs keep a pixel per invocation until measured there.
-    pub fn for_device(info: &crate::gpu::DeviceInfo) -> BlendLayout {
-        if info.is_cpu() {
-            BlendLayout { forward_rows: 16, backward_rows: 16, backward_cols: 2, feature_rows: 4 }
-        } else {
-            BlendLayout::PIXEL
-        }
-    }
-
-    pub(crate) fn check(&self) -> Result<()> {
-        let counts = [self.forward_rows, self.backward_rows, self.backward_cols, self.feature_rows];
-        if !counts.iter().all(|v| matches!(v, 1 | 2 | 4 | 8 | 16)) {
-            bail!("blend layout {self:?}: each count must be 1, 2, 4, 8 or 16");
-        }
-        Ok(())
-    }
 }
 
 impl Rasterizer {
@@ -593,35 +557,5 @@ impl Rasterizer {
             tiles_y,
             feature_dim,
         }
-    }
-}
-
-/// Device-memory bytes each forward pass must read and write at least (every input element read
-/// once, every output written once), for the benches' roofline columns.
-mod moved {
-    /// Means, scales, rotations, opacity and the active SH in; 2D mean, conic and opacity, color,
-    /// depth, sort key and index, tile rectangle and touched count out.
-    pub fn project(n: u32, sh_degree: u32) -> u64 {
-        let sh = 12 * (sh_degree as u64 + 1).pow(2);
-        n as u64 * ((12 + 12 + 16 + 4 + sh) + (8 + 16 + 12 + 4 + 4 + 4 + 16 + 4))
-    }
-
-    /// A stable radix sort of `count` (key, value) pairs by `bits` bits: per 8-bit pass the count
-    /// reads the keys, the scatter reads the pairs and writes them.
-    pub fn sort(count: u32, bits: u32) -> u64 {
-        count as u64 * (4 + 8 + 8) * crate::sort::passes_for_bits(bits) as u64
-    }
-
-    /// Per Gaussian its index, touched count, offset, 2D mean, conic and tile rectangle in; per
-    /// intersection its tile and Gaussian out.
-    pub fn emit(n: u32, intersections: u32) -> u64 {
-        n as u64 * (4 + 4 + 4 + 8 + 16 + 16) + intersections as u64 * 8
-    }
-
-    /// Per intersection its Gaussian index and that Gaussian's 2D mean, conic, opacity, color and
-    /// depth in; per pixel RGB, alpha, depth, expected depth, final transmittance and contributor
-    /// count out; the tile ranges in.
-    pub fn blend(intersections: u32, pixels: u32, tiles: u32) -> u64 {
-        intersections as u64 * (4 + 8 + 16 + 16) + pixels as u64 * 32 + tiles as u64 * 8
     }
 }
