@@ -38,7 +38,9 @@ impl BilinearTaps {
     #[inline]
     fn new(w: usize, h: usize, x: f64, y: f64) -> BilinearTaps {
         let (x, y) = ((x - 0.5).clamp(0.0, (w - 1) as f64), (y - 0.5).clamp(0.0, (h - 1) as f64));
-        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        // the floor of a non-negative value is its truncation: `as` gives it without the call to
+        // libm's floor that `f64::floor` is on a baseline x86-64 build
+        let (x0, y0) = (x as usize, y as usize);
         let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
         let (fx, fy) = ((x - x0 as f64) as f32, (y - y0 as f64) as f32);
         BilinearTaps { at: [y0 * w + x0, y0 * w + x1, y1 * w + x0, y1 * w + x1], fx, fy }

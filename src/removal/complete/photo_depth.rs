@@ -102,20 +102,41 @@ impl SeenPixels<'_> {
     /// Color variance (RGB summed) across the views that still see pixel `i`'s point off their
     /// holes at its depth times `scale`; None with fewer than two.
     fn variance(&self, i: usize, scale: f64) -> Option<f64> {
-        // no allocation per call (it runs ~130 times per pixel)
-        let mut spread = ColorSpread::default();
+        let mut spread = [ColorSpread::default()];
+        self.add_samples(i, &[scale], &mut spread);
+        spread[0].variance()
+    }
+
+    /// Adds to `spreads[k]` the color of pixel `i`'s point at its depth times `scales[k]` in each
+    /// view that sees it there off its hole. View after view, every scale at once: a view's
+    /// camera, hole and photo are looked up once for all the scales, and its samples lie close
+    /// together in its photo. Each spread still takes the views in their order, so the sums are
+    /// those of one scale at a time (the photo depth stage ran ~130 scales per pixel that way).
+    fn add_samples(&self, i: usize, scales: &[f64], spreads: &mut [ColorSpread]) {
         let range = self.starts[i]..self.starts[i + 1];
         for (&j, [a, b]) in self.views[range.clone()].iter().zip(&self.lines[range]) {
             let s = &self.sources[j as usize];
-            let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
-            let Some((x, y, _)) = s.camera.camera_point_to_image(pc) else { continue };
             let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
-            if s.hole[y as usize * sw + x as usize] {
-                continue;
+            let photo = &self.photos[j as usize];
+            for (spread, &scale) in spreads.iter_mut().zip(scales) {
+                let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
+                let Some((x, y, _)) = s.camera.camera_point_to_image(pc) else { continue };
+                if s.hole[y as usize * sw + x as usize] {
+                    continue;
+                }
+                spread.add(sample_bilinear_pixels(photo, sw, sh, x, y));
             }
-            spread.add(sample_bilinear_pixels(&self.photos[j as usize], sw, sh, x, y));
         }
-        spread.variance()
+    }
+
+    /// The variance of pixel `i` at each of `scales` (`variance`), into `out`; `spreads` is
+    /// scratch of the same length.
+    fn variances(&self, i: usize, scales: &[f64], spreads: &mut [ColorSpread], out: &mut [Option<f64>]) {
+        spreads.iter_mut().for_each(|s| *s = ColorSpread::default());
+        self.add_samples(i, scales, spreads);
+        for (o, s) in out.iter_mut().zip(spreads.iter()) {
+            *o = s.variance();
+        }
     }
 
     /// Mean variance over all pixels (those that have one, in pixel order; infinity when none
@@ -126,9 +147,12 @@ impl SeenPixels<'_> {
     fn mean_variances(&self, scales: &[f64]) -> Vec<f64> {
         // -0.0: where `Sum for f64` starts, as the per-scale sums did before
         let mut sums = vec![(-0.0f64, 0usize); scales.len()];
+        let mut spreads: Vec<ColorSpread> = scales.iter().map(|_| ColorSpread::default()).collect();
+        let mut values = vec![None; scales.len()];
         for i in 0..self.pixels.len() {
-            for (sum, &s) in sums.iter_mut().zip(scales) {
-                if let Some(v) = self.variance(i, s) {
+            self.variances(i, scales, &mut spreads, &mut values);
+            for (sum, v) in sums.iter_mut().zip(&values) {
+                if let Some(v) = v {
                     sum.0 += v;
                     sum.1 += 1;
                 }
@@ -215,7 +239,14 @@ pub fn correct_hole_depth(
     // per pixel around it: each candidate's costs summed over a window of seen pixels
     let local: Vec<f64> =
         (-LOCAL_STEPS..=LOCAL_STEPS).map(|k| global * (1.0 + LOCAL_RANGE * k as f64 / LOCAL_STEPS as f64)).collect();
-    let volume: Vec<Vec<Option<f64>>> = (0..n).map(|i| local.iter().map(|&s| seen.variance(i, s)).collect()).collect();
+    let mut spreads: Vec<ColorSpread> = local.iter().map(|_| ColorSpread::default()).collect();
+    let volume: Vec<Vec<Option<f64>>> = (0..n)
+        .map(|i| {
+            let mut values = vec![None; local.len()];
+            seen.variances(i, &local, &mut spreads, &mut values);
+            values
+        })
+        .collect();
     let mut index = vec![usize::MAX; depth.len()];
     for (i, &p) in seen.pixels.iter().enumerate() {
         index[p] = i;
