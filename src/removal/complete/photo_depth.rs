@@ -110,8 +110,9 @@ impl SeenPixels<'_> {
     /// Adds to `spreads[k]` the color of pixel `i`'s point at its depth times `scales[k]` in each
     /// view that sees it there off its hole. View after view, every scale at once: a view's
     /// camera, hole and photo are looked up once for all the scales, and its samples lie close
-    /// together in its photo. Each spread still takes the views in their order, so the sums are
-    /// those of one scale at a time (the photo depth stage ran ~130 scales per pixel that way).
+    /// together in its photo. Each spread still takes the views in their order: the sums of one
+    /// scale at a time, bit for bit (the stage 3.6 -> 2.9 s on the statue `images_2`, ~130 scales
+    /// per pixel).
     fn add_samples(&self, i: usize, scales: &[f64], spreads: &mut [ColorSpread]) {
         let range = self.starts[i]..self.starts[i + 1];
         for (&j, [a, b]) in self.views[range.clone()].iter().zip(&self.lines[range]) {
