@@ -124,8 +124,8 @@ pub struct CompletionConfig {
     /// surface point (at its completed depth) and inventing only what none did, so that fusion
     /// and refinement do not average several inventions. Off by default: a borrowed color lands
     /// where the lender's completed depth puts it, so one view's depth error reaches the others
-    /// (on the composited cup masked PSNR fell from 26.0 to 20.7 dB; on the statue scenes +1.0
-    /// and -0.6 dB, LPIPS sharper on one of two). Needs the color transfer.
+    /// (on the real-photo bench masked PSNR moved by -0.44 to +0.27 dB and LPIPS by -0.015 to
+    /// +0.060; the synth rooms lost 0.7-8.9 dB). Needs the color transfer.
     #[arg(long)]
     pub share_inventions: bool,
     /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.
