@@ -17,9 +17,9 @@ use crate::scene::{Camera, GaussianScene, MAX_SH_DEGREE};
 use crate::shaders;
 use crate::sort::{self, scan, RadixSort};
 use anyhow::{bail, Result};
+pub use blend_layout::BlendLayout;
 use features::FeaturePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
-pub use blend_layout::BlendLayout;
 pub use scene_renderer::{render_rgb, SceneRenderer};
 use specialized::SpecializedPipelines;
 
