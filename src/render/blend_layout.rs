@@ -3,8 +3,8 @@
 use anyhow::{bail, Result};
 
 /// Pixels per invocation of the blend passes on one device. An invocation owns a block of a 16x16
-/// tile, so it fetches each Gaussian once for the block (forward) and shares a
-/// Gaussian's subgroup reductions and atomics over it (backward). Each count is 1, 2, 4, 8 or 16.
+/// tile, so it fetches each Gaussian once for the block (forward) and shares a Gaussian's
+/// subgroup reductions and atomics over it (backward). Each count is 1, 2, 4, 8 or 16.
 #[derive(Clone, Copy, Debug)]
 pub struct BlendLayout {
     /// blend.comp: a column of this many rows.
