@@ -45,6 +45,8 @@ pub fn center(i: usize, w: usize) -> (f64, f64) {
 /// percent of noise).
 pub const PLANE_TOLERANCE: f64 = 0.03;
 const RANSAC_TRIALS: usize = 256;
+/// Points a RANSAC trial counts between its checks of whether it can still win.
+const COUNT_CHUNK: usize = 512;
 
 /// Solves the N x N system m z = r (Gaussian elimination with partial pivoting); None if singular
 /// (a pivot below 1e-12 of the largest entry).
@@ -171,8 +173,18 @@ pub fn fit_planes(
             }
             let Some([a, b, c]) = solve(m, r) else { continue };
             let p = Plane { a, b, c };
-            let n = (0..pts.len()).filter(|&k| (p.disparity(xs[k], ys[k]) - ds[k]).abs() / ds[k] <= tol).count();
-            if best.as_ref().is_none_or(|(bn, _)| n > *bn) {
+            // counted a chunk at a time, the trial dropped once even all the points left could
+            // not lift it above the best so far (only a larger count replaces the best)
+            let to_beat = best.as_ref().map(|(bn, _)| *bn);
+            let mut n = 0;
+            for start in (0..pts.len()).step_by(COUNT_CHUNK) {
+                let end = (start + COUNT_CHUNK).min(pts.len());
+                n += (start..end).filter(|&k| (p.disparity(xs[k], ys[k]) - ds[k]).abs() / ds[k] <= tol).count();
+                if to_beat.is_some_and(|bn| n + (pts.len() - end) <= bn) {
+                    break;
+                }
+            }
+            if to_beat.is_none_or(|bn| n > bn) {
                 best = Some((n, p));
             }
         }
