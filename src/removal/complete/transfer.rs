@@ -6,7 +6,9 @@
 //! depth guidance pays off in color, not just in geometry.
 
 use super::source_views::{back_project, sees, SourceView};
-use crate::image_ops::{bounding_box, box_count, box_max, box_sum, distance_to, sample_bilinear, sample_lanczos3_rgb};
+use crate::image_ops::{
+    bounding_box, box_count, box_max, box_sum, distance_within, sample_bilinear, sample_lanczos3_rgb,
+};
 use crate::scene::exposure::ColorAffine;
 use crate::scene::Camera;
 
@@ -159,7 +161,7 @@ fn source_offsets(
     let n = w * h;
     let own = &sources[target];
     let reach = (w as f64 * LOCAL_MATCH_SPAN).max(1.0) as f32;
-    let distance = distance_to(hole, w, h);
+    let distance = distance_within(hole, w, h, reach);
     let around: Vec<usize> = (0..n)
         .filter(|&p| !hole[p] && !own.hole[p] && distance[p] <= reach && own.alpha[p] > 0.5 && own.depth[p] > 0.0)
         .collect();
