@@ -264,6 +264,17 @@ fn demo_quick_beats_removal_only_and_remove_keeps_the_background() {
         assert!(c["depth_refiner"].as_str().unwrap().contains("denoiser.onnx"));
         assert!(r["fusion"]["patch_gaussians"].as_u64().unwrap() > 0);
     }
+    // a depth model whose output cannot be anchored is an error naming the view
+    let flat = onnx::write(&models, "flat_depth.onnx", &onnx::flat_depth());
+    let out = std::process::Command::new(exe)
+        .args(["remove", "--scene", &tagged, "--data", &data, "--labels", "1,2", "--out", &path("flat_out")])
+        .args(["--depth-model", &flat.to_string_lossy(), "--no-refine"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    let first = std::path::Path::new(&edited[0]).file_stem().unwrap().to_string_lossy().into_owned();
+    let named = format!("completing view {first}");
+    assert!(!out.status.success() && err.contains(&named) && err.contains("the prior is constant"), "{err}");
     std::fs::remove_dir_all(&root).ok();
 }
 

@@ -118,7 +118,7 @@ fn default_completer(gpu: &cogeo::gpu::Gpu, cam: &Camera) -> Completer {
 /// One view's completion inputs: the render after removal (`rgb`, `alpha`, `depth`) and its hole,
 /// which is all to be filled.
 fn view_inputs<'a>(
-    cam: &Camera,
+    cam: &'a Camera,
     rgb: &'a [f32],
     alpha: &'a [f32],
     depth: &'a [f32],
@@ -126,6 +126,7 @@ fn view_inputs<'a>(
 ) -> ViewInputs<'a> {
     let (width, height) = (cam.width as usize, cam.height as usize);
     ViewInputs {
+        name: &cam.name,
         width,
         height,
         intrinsics: cam.into(),

@@ -70,6 +70,7 @@ impl<'a> EditedView<'a> {
     pub fn completion_inputs(&self) -> ViewInputs<'_> {
         let (m, camera) = (&self.masked, self.camera);
         ViewInputs {
+            name: &camera.name,
             width: camera.width as usize,
             height: camera.height as usize,
             intrinsics: Intrinsics::from(camera),

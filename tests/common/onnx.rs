@@ -201,6 +201,25 @@ pub fn tiny_depth() -> Vec<u8> {
     )
 }
 
+/// A depth model that sees nothing: 0 times the channel mean of its input, [1, H, W].
+pub fn flat_depth() -> Vec<u8> {
+    model(
+        &[
+            Node {
+                op: "ReduceMean",
+                inputs: &["pixel_values"],
+                outputs: &["mean"],
+                ints: &[("axes", &[1])],
+                int: &[("keepdims", 0)],
+            },
+            node("Mul", &["mean", "zero"], &["predicted_depth"]),
+        ],
+        &[Io { name: "pixel_values", dims: &[Some(1), Some(3), N, N] }],
+        &[Io { name: "predicted_depth", dims: &[Some(1), N, N] }],
+        &[("zero", &[], &[0.0])],
+    )
+}
+
 /// Denoiser contract: predicts the noise of a clean signal 0, eps = sample / sqrt(1 - alpha_bar).
 pub fn tiny_denoiser() -> Vec<u8> {
     model(

@@ -38,7 +38,7 @@ use crate::image_ops::interleave_rgb;
 use crate::parallel::for_each_item;
 use crate::planes::Plane;
 use crate::scene::Camera;
-use anyhow::Result;
+use anyhow::{Context, Result};
 use depth::{DepthContract, DepthPrior, DepthView, PriorSpace};
 use diffusion::OnnxDenoiser;
 use inpaint::Inpainter;
@@ -166,6 +166,8 @@ pub struct Completer {
 
 /// The inputs of one view.
 pub struct ViewInputs<'a> {
+    /// The view's name (its camera's), for errors.
+    pub name: &'a str,
     pub width: usize,
     pub height: usize,
     /// The view's camera intrinsics (for the planes in 3D).
@@ -283,13 +285,19 @@ impl Completer {
         if !self.host_only(transfer_follows) {
             let mut out = Vec::with_capacity(views.len());
             for (i, v) in views.iter().enumerate() {
-                out.push(self.complete_view(v, i, transfer_follows)?);
+                out.push(
+                    self.complete_view(v, i, transfer_follows)
+                        .with_context(|| format!("completing view {}", v.name))?,
+                );
                 progress(i + 1, views.len());
             }
             return Ok(out);
         }
         let mut out: Vec<Option<Result<Completed>>> = (0..views.len()).map(|_| None).collect();
-        for_each_item(&mut out, progress, |i, c| *c = Some(self.complete_view(&views[i], i, transfer_follows)));
+        for_each_item(&mut out, progress, |i, c| {
+            let v = &views[i];
+            *c = Some(self.complete_view(v, i, transfer_follows).with_context(|| format!("completing view {}", v.name)))
+        });
         out.into_iter().map(|c| c.expect("every view ran")).collect()
     }
 
