@@ -60,6 +60,27 @@ fn least_squares_recovers_a_known_scale_and_shift() {
     assert!(depth::fit_scale_shift(&vec![1.0; w * h], &truth, &all).is_none());
 }
 
+/// A wall faced squarely (or a table seen from straight above) renders one depth around the hole:
+/// no scale and shift can be fitted to a constant prior, but the built-in prior is the render
+/// itself there, and continues the wall into the hole.
+#[test]
+fn builtin_prior_of_a_wall_faced_squarely_is_anchored_as_it_is() {
+    let (w, h) = (64, 48);
+    let hole = hole(w, h);
+    let render_depth: Vec<f32> = hole.iter().map(|&m| if m { 0.0 } else { 2.5 }).collect();
+    let valid: Vec<bool> = hole.iter().map(|&m| !m).collect();
+    let image = vec![0.5; 3 * w * h];
+    let view = depth_view(w, h, &image, &render_depth, &valid);
+    let (prior, space) = DepthPrior::BuiltIn.predict(&view).unwrap();
+    let anchored = depth::anchor(&view, &prior, space, &hole, 4.0).unwrap();
+    assert_eq!((anchored.scale, anchored.shift), (1.0, 0.0));
+    let err = (0..w * h).map(|i| (anchored.depth[i] - 2.5).abs()).fold(0f32, f32::max);
+    assert!(err < 1e-5, "wall depth off by {err}");
+    // a prior of its own that is flat is still refused
+    let flat = vec![1.0; w * h];
+    assert!(depth::anchor(&view, &flat, space, &hole, 4.0).is_err());
+}
+
 #[test]
 fn builtin_prior_keeps_the_crease_where_a_floor_meets_a_wall() {
     // seen from inside a room, the nearer of two planes: inverse depth is the larger of two affine

@@ -271,10 +271,17 @@ pub fn anchor(v: &DepthView, prior: &[f32], space: PriorSpace, hole: &[bool], so
         PriorSpace::Depth => v.render_depth.to_vec(),
     };
     let select: Vec<bool> = (0..w * h).map(|i| v.valid[i] && v.render_depth[i] > 0.0).collect();
-    let (a, b) = fit_scale_shift(prior, &target, &select).ok_or_else(|| {
-        anyhow::anyhow!("depth anchoring: the prior is constant or fewer than 2 background pixels are covered")
-    })?;
     let fit_pixels = select.iter().filter(|&&s| s).count();
+    // a prior that already is the render outside the hole (the built-in one) needs no fit, and
+    // where the render is constant there (a wall faced squarely, a table seen from straight
+    // above) no fit exists
+    let is_the_render =
+        || fit_pixels >= 2 && (0..w * h).filter(|&i| select[i]).all(|i| prior[i] == target[i] && target[i].is_finite());
+    let (a, b) = match fit_scale_shift(prior, &target, &select) {
+        Some(fit) => fit,
+        None if is_the_render() => (1.0, 0.0),
+        None => bail!("depth anchoring: the prior is constant or fewer than 2 background pixels are covered"),
+    };
     let residual =
         ((0..w * h).filter(|&i| select[i]).map(|i| (a * prior[i] as f64 + b - target[i] as f64).powi(2)).sum::<f64>()
             / fit_pixels as f64)
