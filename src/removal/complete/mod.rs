@@ -282,22 +282,20 @@ impl Completer {
         transfer_follows: bool,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Vec<Completed>> {
+        let complete = |i: usize| {
+            let v = &views[i];
+            self.complete_view(v, i, transfer_follows).with_context(|| format!("completing view {}", v.name))
+        };
         if !self.host_only(transfer_follows) {
             let mut out = Vec::with_capacity(views.len());
-            for (i, v) in views.iter().enumerate() {
-                out.push(
-                    self.complete_view(v, i, transfer_follows)
-                        .with_context(|| format!("completing view {}", v.name))?,
-                );
+            for i in 0..views.len() {
+                out.push(complete(i)?);
                 progress(i + 1, views.len());
             }
             return Ok(out);
         }
         let mut out: Vec<Option<Result<Completed>>> = (0..views.len()).map(|_| None).collect();
-        for_each_item(&mut out, progress, |i, c| {
-            let v = &views[i];
-            *c = Some(self.complete_view(v, i, transfer_follows).with_context(|| format!("completing view {}", v.name)))
-        });
+        for_each_item(&mut out, progress, |i, c| *c = Some(complete(i)));
         out.into_iter().map(|c| c.expect("every view ran")).collect()
     }
 
