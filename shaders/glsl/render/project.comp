@@ -83,7 +83,10 @@ void main() {
     float basis[16];
     sh_basis(dir, SH_DEGREE, basis);
     uint K = p.sh_coeffs;
-    vec3 color = vec3(0.0);
+    // precise: the sum in this order, no fused multiply-adds. A pipeline specialized to a lower
+    // degree must give the same bits as a higher one over zero bands (SceneRenderer renders the
+    // learnt degree); NVIDIA's compiler fused the two specializations' sums differently (2.5 ulp).
+    precise vec3 color = vec3(0.0);
     Vec3View sh = Vec3View(p.sh);
     for (uint k = 0; k < SH_BANDS; k++) color += basis[k] * sh.v[g * K + k];
     color = max(color + 0.5, vec3(0.0));
