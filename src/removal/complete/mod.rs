@@ -6,6 +6,7 @@
 //! - `inpaint`: the built-in inpainters (exemplar texture synthesis, harmonic fill), a
 //!   LaMa-contract ONNX model, or the user's own inpainted views.
 //! - `exemplar`: PatchMatch exemplar inpainting on the GPU, guided by the surfaces.
+//! - `edge_tone`: the exemplar's inventions shifted to the tone of the colors around them.
 //! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
 //!   farther plane where the Gaussians left after removal show it, the edge-aware model-free
 //!   refinement.
@@ -23,6 +24,7 @@
 
 pub mod depth;
 pub mod diffusion;
+pub mod edge_tone;
 pub mod exemplar;
 pub mod harmonic;
 pub mod inpaint;
@@ -438,6 +440,11 @@ impl Completer {
             let disparity = depth::disparity(&c.depth);
             let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
             c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
+            if matches!(self.inpainter, Inpainter::Exemplar(_)) {
+                // copied texture keeps the brightness of where it was copied from
+                let lends: Vec<bool> = (0..w * h).map(|p| !rest[p] && !avoid[p]).collect();
+                edge_tone::match_edge_tone(&mut c.rgb, &rest, &lends, w, h);
+            }
             c.texture_pending = false;
         }
         Ok(invented)
