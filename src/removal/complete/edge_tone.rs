@@ -22,14 +22,31 @@ use crate::image_ops::components;
 /// Fewest edge pairs a part needs before its tone is trusted (per channel: one pair each).
 const MIN_EDGE_PAIRS: usize = 3;
 
-/// Shifts each connected part of `invented` in planar RGB `rgb` (w x h, values in [0, 1]) by
-/// the per-channel median of (neighbour - pixel) over its 4-neighbour pairs whose neighbour is in
-/// `lends`: the pixels whose colours are not invented (found in the photos, or outside the hole).
-/// Parts with fewer than MIN_EDGE_PAIRS such pairs stay as they are. Returns how many parts moved.
-pub fn match_edge_tone(rgb: &mut [f32], invented: &[bool], lends: &[bool], w: usize, h: usize) -> usize {
+/// Shifts each connected part of `invented` on one surface (`surfaces`: the labels of
+/// `surfaces::surfaces_around`, 0 = none) in planar RGB `rgb` (w x h, values in [0, 1]) by the
+/// per-channel median of (neighbour - pixel) over its 4-neighbour pairs whose neighbour is in
+/// `lends` (the pixels whose colours are not invented: found in the photos, or outside the hole)
+/// and on the same surface (any, for a part on none): a kept object beside the hole lends no
+/// tone to the floor. Parts with fewer than MIN_EDGE_PAIRS such pairs stay as they are. Returns
+/// how many parts moved.
+pub fn match_edge_tone(
+    rgb: &mut [f32],
+    invented: &[bool],
+    lends: &[bool],
+    surfaces: &[u8],
+    w: usize,
+    h: usize,
+) -> usize {
     let n = w * h;
     let mut moved = 0;
-    for part in components(invented, w, h) {
+    let mut labels: Vec<u8> = (0..n).filter(|&p| invented[p]).map(|p| surfaces[p]).collect();
+    labels.sort_unstable();
+    labels.dedup();
+    let parts = labels.into_iter().flat_map(|s| {
+        let on_s: Vec<bool> = (0..n).map(|p| invented[p] && surfaces[p] == s).collect();
+        components(&on_s, w, h).into_iter().map(move |part| (s, part))
+    });
+    for (s, part) in parts.collect::<Vec<_>>() {
         let mut diffs: [Vec<f32>; 3] = Default::default();
         for &p in &part {
             let (x, y) = (p % w, p / w);
@@ -39,7 +56,8 @@ pub fn match_edge_tone(rgb: &mut [f32], invented: &[bool], lends: &[bool], w: us
                 (y > 0).then(|| p - w),
                 (y + 1 < h).then(|| p + w),
             ];
-            for q in neighbours.into_iter().flatten().filter(|&q| lends[q] && !invented[q]) {
+            let same_surface = |q: usize| s == 0 || surfaces[q] == s;
+            for q in neighbours.into_iter().flatten().filter(|&q| lends[q] && !invented[q] && same_surface(q)) {
                 for (c, d) in diffs.iter_mut().enumerate() {
                     d.push(rgb[c * n + q] - rgb[c * n + p]);
                 }
@@ -113,7 +131,7 @@ mod tests {
                 t
             }
         });
-        let moved = match_edge_tone(&mut rgb, &invented, &lends, w, h);
+        let moved = match_edge_tone(&mut rgb, &invented, &lends, &vec![0; w * h], w, h);
         assert_eq!(moved, 2);
         let on_parts = |img: &[f32]| -> Vec<f32> {
             (0..3).flat_map(|c| (0..w * h).filter(|&p| invented[p]).map(move |p| img[c * w * h + p])).collect()
@@ -136,12 +154,12 @@ mod tests {
         let lends: Vec<bool> = invented.iter().map(|&i| !i).collect();
 
         let mut same = checker.clone();
-        match_edge_tone(&mut same, &invented, &lends, w, h);
+        match_edge_tone(&mut same, &invented, &lends, &vec![0; w * h], w, h);
         assert_eq!(same, checker);
 
         let mut bright: Vec<f32> =
             checker.iter().enumerate().map(|(i, &v)| if invented[i % (w * h)] { v + 0.2 } else { v }).collect();
-        match_edge_tone(&mut bright, &invented, &lends, w, h);
+        match_edge_tone(&mut bright, &invented, &lends, &vec![0; w * h], w, h);
         let err = max_error(&bright, &checker);
         assert!(err < 1e-6, "checkerboard off by {err}");
     }
@@ -153,7 +171,35 @@ mod tests {
         let invented: Vec<bool> = (0..w * h).map(|p| p % w < 4).collect();
         let lends = vec![false; w * h];
         let mut rgb = vec![0.5; 3 * w * h];
-        assert_eq!(match_edge_tone(&mut rgb, &invented, &lends, w, h), 0);
+        assert_eq!(match_edge_tone(&mut rgb, &invented, &lends, &vec![0; w * h], w, h), 0);
         assert!(rgb.iter().all(|&v| v == 0.5));
+    }
+
+    /// A floor part (surface 1) invented 0.1 too dark, with a bright kept object (surface 2) along
+    /// three of its four sides, takes the floor's tone from its one floor side: the object's
+    /// pairs, the majority, would have lifted it toward the object's white.
+    #[test]
+    fn a_kept_object_beside_the_part_lends_no_tone() {
+        let (w, h) = (32, 32);
+        let part = |x, y| inside(x, y, 10, 20, 10, 20);
+        let object = |x, y| inside(x, y, 8, 22, 8, 22) && !part(x, y) && y < 20;
+        let invented: Vec<bool> = (0..w * h).map(|p| part(p % w, p / w)).collect();
+        let surfaces: Vec<u8> = (0..w * h).map(|p| if object(p % w, p / w) { 2 } else { 1 }).collect();
+        let lends: Vec<bool> = invented.iter().map(|&i| !i).collect();
+        let mut rgb = image(w, h, |x, y, c| {
+            if object(x, y) {
+                1.0
+            } else if part(x, y) {
+                0.3 + 0.1 * c as f32
+            } else {
+                0.4 + 0.1 * c as f32
+            }
+        });
+        match_edge_tone(&mut rgb, &invented, &lends, &surfaces, w, h);
+        let err = (0..3)
+            .flat_map(|c| (0..w * h).filter(|&p| invented[p]).map(move |p| (c, p)))
+            .map(|(c, p)| (rgb[c * w * h + p] - (0.4 + 0.1 * c as f32)).abs())
+            .fold(0.0, f32::max);
+        assert!(err < 1e-6, "floor part off the floor's tone by {err}");
     }
 }

@@ -441,9 +441,9 @@ impl Completer {
             let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
             c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
             if matches!(self.inpainter, Inpainter::Exemplar(_)) {
-                // copied texture keeps the brightness of where it was copied from
+                // copied texture keeps the brightness of where it was copied from (edge_tone.rs)
                 let lends: Vec<bool> = (0..w * h).map(|p| !rest[p] && !avoid[p]).collect();
-                edge_tone::match_edge_tone(&mut c.rgb, &rest, &lends, w, h);
+                edge_tone::match_edge_tone(&mut c.rgb, &rest, &lends, &c.surfaces, w, h);
             }
             c.texture_pending = false;
         }
