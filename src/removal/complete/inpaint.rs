@@ -20,6 +20,15 @@ use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
 use std::path::Path;
 
+/// The built-in inpainters.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum BuiltInInpainter {
+    #[default]
+    Exemplar,
+    Harmonic,
+}
+
 /// Side of the LaMa contract's square input.
 pub const LAMA_SIZE: usize = 512;
 

@@ -7,6 +7,7 @@
 //!   LaMa-contract ONNX model, or the user's own inpainted views.
 //! - `exemplar`: PatchMatch exemplar inpainting on the GPU, guided by the surfaces.
 //! - `edge_tone`: the exemplar's inventions shifted to the tone of the colors around them.
+//! - `invention_contrast`: their texture's contrast lowered where it is random.
 //! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
 //!   farther plane where the Gaussians left after removal show it, the edge-aware model-free
 //!   refinement.
@@ -25,6 +26,7 @@
 pub mod depth;
 pub mod diffusion;
 pub mod edge_tone;
+pub mod invention_contrast;
 pub mod exemplar;
 pub mod harmonic;
 pub mod inpaint;
@@ -43,6 +45,7 @@ use crate::scene::Camera;
 use anyhow::{Context, Result};
 use depth::{DepthContract, DepthPrior, DepthView, PriorSpace};
 use diffusion::OnnxDenoiser;
+pub use inpaint::BuiltInInpainter;
 use inpaint::Inpainter;
 use leftover_depth::prefer_leftover_depth;
 use photo_depth::{correct_hole_depth, DepthScale};
@@ -62,15 +65,6 @@ const PHOTO_DEPTH_TOLERANCE: f64 = 0.05;
 /// this test, half of them by less than 8 %. At 10 % its seen-elsewhere PSNR rose 0.8 dB
 /// (bench/RESULTS.md).
 const TRANSFER_TOLERANCE: f64 = 0.10;
-
-/// The built-in inpainters.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum BuiltInInpainter {
-    #[default]
-    Exemplar,
-    Harmonic,
-}
 
 /// Completion settings: the one home of their defaults, also `cogeo remove`'s flags. The models
 /// they name are loaded by `Completer::load`.
@@ -130,6 +124,13 @@ pub struct CompletionConfig {
     /// +0.060; the synth rooms lost 0.7-8.9 dB). Needs the color transfer.
     #[arg(long)]
     pub share_inventions: bool,
+    /// Contrast kept of the exemplar's texture where no photo saw the background and the surface's
+    /// texture does not repeat (0-1): each such invented pixel becomes its surface's local mean
+    /// plus this times its difference from it. 1 keeps the copied texture as it is (sharpest, but
+    /// grass copied from elsewhere falls where the real grass does not); lower trades sharpness
+    /// for error against the unseen truth (invention_contrast.rs).
+    #[arg(long, default_value_t = 0.7, value_parser = invention_contrast::parse_contrast)]
+    pub invention_contrast: f32,
     /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.
     #[arg(long, default_value_t = 4.0)]
     pub soft_radius: f32,
@@ -157,6 +158,8 @@ pub struct Completer {
     /// Views take the colors earlier views invented for the same surface point (`transfer_colors`;
     /// `false`, the default: each view invents its own).
     pub share_inventions: bool,
+    /// Contrast kept of the exemplar's inventions (`invention_contrast`).
+    pub invention_contrast: f32,
     /// The transfer's texture fills (`texture_view`) of independent views (no shared
     /// inventions, a built-in inpainter) run on all cores. On a GPU its host work then overlaps
     /// (on a lent H200 this half of the stage, one view after another, was half of a removal's
@@ -262,6 +265,7 @@ impl Completer {
             depth_guidance: cfg.depth_guidance,
             photo_depth: cfg.photo_depth,
             share_inventions: cfg.share_inventions,
+            invention_contrast: cfg.invention_contrast,
             views_in_parallel: !gpu.info().is_cpu(),
             seed,
         })
@@ -444,6 +448,11 @@ impl Completer {
                 // copied texture keeps the brightness of where it was copied from (edge_tone.rs)
                 let lends: Vec<bool> = (0..w * h).map(|p| !rest[p] && !avoid[p]).collect();
                 edge_tone::match_edge_tone(&mut c.rgb, &rest, &lends, &c.surfaces, w, h);
+                if self.invention_contrast < 1.0 {
+                    let (labels, planes) = (&c.surfaces[..], &c.planes[..]);
+                    let random = invention_contrast::random_copies(&image, &rest, &avoid, labels, planes, &k, w, h);
+                    invention_contrast::lower_contrast(&mut c.rgb, &random, labels, w, h, self.invention_contrast);
+                }
             }
             c.texture_pending = false;
         }

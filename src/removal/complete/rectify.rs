@@ -153,6 +153,9 @@ pub struct Rectified {
     /// ON_SURFACE, or OFF_SURFACE for texels the surface's pixels do not cover: the exemplar's
     /// patch distance and vote skip those.
     pub labels: Vec<u8>,
+    /// Whether the surface's known texture repeats (`repeats`): a periodic texture's continuation
+    /// is in phase with the truth, a random one's is not (invention_contrast.rs).
+    pub repeats: bool,
     frame: PlaneFrame,
     /// Plane coordinates of texel (0, 0)'s corner, and the texel side.
     corner: DVec2,
@@ -202,7 +205,7 @@ pub fn rectify(
     let grid = |context: f64| sample_grid(frame, &surface, (lo, hi), texel, context);
     let wide = grid(PERIODIC_CONTEXT);
     if repeats(&wide) {
-        Some(wide)
+        Some(Rectified { repeats: true, ..wide })
     } else {
         Some(grid(LOCAL_CONTEXT))
     }
@@ -299,6 +302,7 @@ fn sample_grid(
         hole: vec![false; n],
         avoid: vec![true; n],
         labels: vec![OFF_SURFACE; n],
+        repeats: false,
         frame: *frame,
         corner,
         texel,
@@ -474,6 +478,7 @@ mod tests {
         for (name, texture, periodic) in cases {
             let grid = facing_plane(texture).unwrap();
             assert_eq!(repeats(&grid), periodic, "{name}");
+            assert_eq!(grid.repeats, periodic, "{name}: the grid's own flag");
             // the hole's box spans 40 texels (one per pixel) or 41 by rounding
             let inner = (grid.hole.iter().filter(|&&x| x).count() as f64).sqrt();
             let context = if periodic { inner } else { 16.0 }; // 0.4 x 40 is under the 16 minimum
