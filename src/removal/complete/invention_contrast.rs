@@ -11,13 +11,14 @@
 //! `CONTRAST_RADIUS`: contrast 1 keeps the copy as it is, 0 leaves the local mean. A texture that
 //! repeats (a checkerboard, bricks) is continued in phase with the truth, and lowering its
 //! contrast costs what it would gain: at contrast 0.5 on every invention the synth rooms fell
-//! 2.3-3.4 dB, with repeating planes spared room one moved -0.04 (bench/JOURNAL.md, 2026-11-30).
+//! 2.3-3.4 dB; with repeating planes spared they moved -0.06 to +0.05 dB at 0.7 (bench/JOURNAL.md,
+//! 2026-11-30).
 //!
 //! The mean is taken over the same surface only (`surfaces::surfaces_around`), so that a floor's
 //! invention next to a wall's keeps its own tone and the edge between them stays sharp.
 //!
-//! A CPU pass like edge_tone.rs: box sums over the hole's few thousand pixels, after the GPU
-//! inpainting; the planes' repetition test is the rectification's (CPU) once more.
+//! A CPU pass like edge_tone.rs, after the GPU inpainting: one box sum of the image per surface
+//! that holds inventions, and the rectification's repetition test (CPU) once more per plane.
 
 use super::rectify::{rectify, Intrinsics, PlaneFrame};
 use crate::image_ops::{box_count, box_sum};
@@ -25,7 +26,7 @@ use crate::planes::Plane;
 
 /// Half the window of the local mean, in pixels: wider than the exemplar's patches (7 px), so
 /// that the mean is of several copied 7 x 7 patches, not of the one a pixel lies in (on statue-one
-/// radii 12 and 24 scored alike, 6 lower on both masked PSNR and LPIPS).
+/// radii 12 and 24 scored alike, 6 a little lower on both masked PSNR and LPIPS).
 pub const CONTRAST_RADIUS: usize = 12;
 
 /// The `fill` pixels whose invention is a random copy: all but those on a background plane
