@@ -199,7 +199,7 @@ fn rectified_and_in_image(hole: &[bool], dump: &str) -> (f64, f64, f64) {
     let input = punched(&truth, hole);
     let ex = ExemplarFill::new(&gpu, 7).unwrap();
     let none = vec![false; W * H];
-    let rectified = ex.fill_rectified(&input, hole, &none, &labels, None, &[plane], &k, W, H).unwrap();
+    let rectified = ex.fill_rectified(&input, hole, &none, &labels, None, &[plane], &k, W, H).unwrap().rgb;
     let in_image = ex.fill(&input, hole, &labels, W, H).unwrap();
     assert_outside_unchanged(&rectified, &input, hole);
     let harmonic = fill_by_surface(&input, hole, &labels, W, H, 3);
@@ -209,7 +209,7 @@ fn rectified_and_in_image(hole: &[bool], dump: &str) -> (f64, f64, f64) {
         let (w, h, strip) = cogeo::image_ops::hstack_rgb8(&refs, W, H);
         cogeo::io::write_png(&std::path::Path::new(&dir).join(dump), w, h, image::ColorType::Rgb8, &strip).unwrap();
     }
-    let again = ex.fill_rectified(&input, hole, &none, &labels, None, &[plane], &k, W, H).unwrap();
+    let again = ex.fill_rectified(&input, hole, &none, &labels, None, &[plane], &k, W, H).unwrap().rgb;
     assert_eq!(rectified, again, "the rectified fill is deterministic");
     (masked_psnr(&rectified, &truth, hole), masked_psnr(&in_image, &truth, hole), masked_psnr(&harmonic, &truth, hole))
 }

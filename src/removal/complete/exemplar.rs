@@ -206,6 +206,15 @@ pub struct ExemplarFill {
     seed: u64,
 }
 
+/// What `fill_rectified` made: the filled image (planar RGB), and per surface label (1 + the
+/// plane's index; 0 and planes it could not rectify: false) whether the plane's known texture
+/// repeats (`rectify::Rectified::repeats`), which tells a continuation in phase with the truth
+/// from a random copy (invention_contrast.rs).
+pub struct RectifiedFill {
+    pub rgb: Vec<f32>,
+    pub repeats: [bool; 256],
+}
+
 impl ExemplarFill {
     pub fn new(gpu: &Gpu, seed: u64) -> Result<ExemplarFill> {
         Ok(ExemplarFill {
@@ -241,13 +250,15 @@ impl ExemplarFill {
         k: &Intrinsics,
         w: usize,
         h: usize,
-    ) -> Result<Vec<f32>> {
+    ) -> Result<RectifiedFill> {
         let mut out = image.to_vec();
         let mut rest = fill.to_vec();
+        let mut repeats = [false; 256];
         for (s, plane) in planes.iter().enumerate().take(u8::MAX as usize) {
             let label = s as u8 + 1;
             let Some(frame) = PlaneFrame::new(plane, k) else { continue };
             let Some(grid) = rectify(&frame, image, fill, avoid, labels, label, w, h) else { continue };
+            repeats[label as usize] = grid.repeats;
             let level = Level {
                 w: grid.w,
                 h: grid.h,
@@ -274,7 +285,7 @@ impl ExemplarFill {
         if rest.iter().any(|&r| r) {
             out = self.fill_avoiding(&out, &rest, avoid, labels, disparity, w, h)?;
         }
-        Ok(out)
+        Ok(RectifiedFill { rgb: out, repeats })
     }
 
     /// `fill`, taking no source patch that contains an `avoid` pixel: those stay as they are and

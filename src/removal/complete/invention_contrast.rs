@@ -18,11 +18,9 @@
 //! invention next to a wall's keeps its own tone and the edge between them stays sharp.
 //!
 //! A CPU pass like edge_tone.rs, after the GPU inpainting: one box sum of the image per surface
-//! that holds inventions, and the rectification's repetition test (CPU) once more per plane.
+//! that holds inventions.
 
-use super::rectify::{rectify, Intrinsics, PlaneFrame};
 use crate::image_ops::{box_count, box_sum};
-use crate::planes::Plane;
 
 /// Half the window of the local mean, in pixels: wider than the exemplar's patches (7 px), so
 /// that the mean is of several copied 7 x 7 patches, not of the one a pixel lies in (on statue-one
@@ -30,32 +28,13 @@ use crate::planes::Plane;
 pub const CONTRAST_RADIUS: usize = 12;
 
 /// The `fill` pixels whose invention is a random copy: all but those on a background plane
-/// (`labels`, 1 + the index in `planes`) whose known texture in `image` repeats, as the exemplar's
-/// rectification finds it (`rectify::repeats`; `avoid` pixels are not known). A repeating texture
-/// (a checkerboard, bricks: 48 of the synth rooms' 55 planes) is continued in phase with the truth
+/// (`labels`, 1 + the plane's index) whose known texture repeats (`repeats`, by label: the
+/// exemplar's rectification found it so, `exemplar::RectifiedFill`). A repeating texture (a
+/// checkerboard, bricks: 48 of the synth rooms' 55 planes) is continued in phase with the truth
 /// and keeps its contrast; grass, gravel and wood grain (none of the real captures' 173 planes)
 /// are not, nor is what lies on no plane.
-#[allow(clippy::too_many_arguments)]
-pub fn random_copies(
-    image: &[f32],
-    fill: &[bool],
-    avoid: &[bool],
-    labels: &[u8],
-    planes: &[Plane],
-    k: &Intrinsics,
-    w: usize,
-    h: usize,
-) -> Vec<bool> {
-    let mut repeats = [false; 256];
-    for (s, plane) in planes.iter().enumerate().take(u8::MAX as usize) {
-        let label = s as u8 + 1;
-        if !(0..w * h).any(|p| fill[p] && labels[p] == label) {
-            continue;
-        }
-        let Some(frame) = PlaneFrame::new(plane, k) else { continue };
-        repeats[label as usize] = rectify(&frame, image, fill, avoid, labels, label, w, h).is_some_and(|g| g.repeats);
-    }
-    (0..w * h).map(|p| fill[p] && !repeats[labels[p] as usize]).collect()
+pub fn random_copies(fill: &[bool], labels: &[u8], repeats: &[bool; 256]) -> Vec<bool> {
+    fill.iter().zip(labels).map(|(&f, &l)| f && !repeats[l as usize]).collect()
 }
 
 /// `--invention-contrast`'s parser: a number from 0 to 1.
@@ -98,6 +77,8 @@ pub fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: us
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::planes::Plane;
+    use crate::removal::complete::rectify::{rectify, Intrinsics, PlaneFrame};
 
     /// A deterministic texture in [0, 1] (a hash of the pixel and channel).
     fn noise(p: usize, c: usize) -> f32 {
@@ -125,7 +106,11 @@ mod tests {
             [("checkerboard", &checker as &dyn Fn(usize) -> f32, false), ("white noise", &|p| noise(p, 0), true)]
         {
             let image: Vec<f32> = (0..3 * n).map(|i| if fill[i % n] { 0.0 } else { texture(i % n) }).collect();
-            let random = random_copies(&image, &fill, &vec![false; n], &labels, &planes, &k, w, h);
+            // what the exemplar's fill_rectified records of each plane it rectifies
+            let frame = PlaneFrame::new(&planes[0], &k).unwrap();
+            let mut repeats = [false; 256];
+            repeats[1] = rectify(&frame, &image, &fill, &vec![false; n], &labels, 1, w, h).unwrap().repeats;
+            let random = random_copies(&fill, &labels, &repeats);
             for p in 0..n {
                 let want = fill[p] && (labels[p] == 0 || random_on_plane);
                 assert_eq!(random[p], want, "{name}: pixel ({}, {})", p % w, p / w);

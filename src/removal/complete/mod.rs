@@ -443,16 +443,15 @@ impl Completer {
             let k = Intrinsics::from(camera);
             let disparity = depth::disparity(&c.depth);
             let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
-            c.rgb = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
-            if matches!(self.inpainter, Inpainter::Exemplar(_)) {
-                // copied texture keeps the brightness of where it was copied from (edge_tone.rs)
+            let (rgb, repeats) = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
+            c.rgb = rgb;
+            // the exemplar's copied texture: it keeps the brightness of where it was copied from
+            // (edge_tone.rs), and a random texture's copy is not the truth's (invention_contrast.rs)
+            if let Some(repeats) = repeats {
                 let lends: Vec<bool> = (0..w * h).map(|p| !rest[p] && !avoid[p]).collect();
                 edge_tone::match_edge_tone(&mut c.rgb, &rest, &lends, &c.surfaces, w, h);
-                if self.invention_contrast < 1.0 {
-                    let (labels, planes) = (&c.surfaces[..], &c.planes[..]);
-                    let random = invention_contrast::random_copies(&image, &rest, &avoid, labels, planes, &k, w, h);
-                    invention_contrast::lower_contrast(&mut c.rgb, &random, labels, w, h, self.invention_contrast);
-                }
+                let random = invention_contrast::random_copies(&rest, &c.surfaces, &repeats);
+                invention_contrast::lower_contrast(&mut c.rgb, &random, &c.surfaces, w, h, self.invention_contrast);
             }
             c.texture_pending = false;
         }
@@ -536,6 +535,7 @@ impl Completer {
             Inpainter::Exemplar(e) => {
                 let avoid = leftover(v.hole, &fill);
                 e.fill_rectified(v.rgb, &fill, &avoid, &labels, Some(&disparity), &planes.planes, &v.intrinsics, w, h)?
+                    .rgb
             }
             Inpainter::Onnx(_) | Inpainter::Provided { .. } => rgb,
         };
@@ -579,7 +579,8 @@ impl Completer {
     /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more
     /// pixels known), keeping each surface's colors on that surface where the built-in inpainter
     /// is used (`guide`: the surface labels, the completed disparity, the planes and the view's
-    /// intrinsics); `avoid` pixels stay but lend the exemplar fill no texture.
+    /// intrinsics); `avoid` pixels stay but lend the exemplar fill no texture. With the exemplar,
+    /// also which surfaces' texture repeats (`exemplar::RectifiedFill::repeats`).
     #[allow(clippy::too_many_arguments)]
     pub fn inpaint_again(
         &self,
@@ -590,11 +591,16 @@ impl Completer {
         (labels, disparity, planes, k): (&[u8], &[f32], &[Plane], &Intrinsics),
         w: usize,
         h: usize,
-    ) -> Result<Vec<f32>> {
+    ) -> Result<(Vec<f32>, Option<[bool; 256]>)> {
         match &self.inpainter {
-            Inpainter::Harmonic => Ok(surfaces::fill_by_surface(image, fill, labels, w, h, 3)),
-            Inpainter::Exemplar(e) => e.fill_rectified(image, fill, avoid, labels, Some(disparity), planes, k, w, h),
-            Inpainter::Onnx(_) | Inpainter::Provided { .. } => self.inpainter.inpaint_view(index, image, fill, w, h),
+            Inpainter::Harmonic => Ok((surfaces::fill_by_surface(image, fill, labels, w, h, 3), None)),
+            Inpainter::Exemplar(e) => {
+                let filled = e.fill_rectified(image, fill, avoid, labels, Some(disparity), planes, k, w, h)?;
+                Ok((filled.rgb, Some(filled.repeats)))
+            }
+            Inpainter::Onnx(_) | Inpainter::Provided { .. } => {
+                Ok((self.inpainter.inpaint_view(index, image, fill, w, h)?, None))
+            }
         }
     }
 }
