@@ -234,9 +234,10 @@ pub fn run(
         // new cache folder starts without them
         let exposure = with_exposure(spec.capture);
         let kept_as = if exposure { format!("{}-exposure", spec.name) } else { spec.name.to_string() };
-        // (`composites-sfm`: those trained from the capture's own sparse points with its recipe;
-        // the `composites` of before 2026-11-29 started from depth samples, the synth rooms' way)
-        let reuse = reuse_composites.then(|| capture_cache.join("composites-sfm").join(kept_as));
+        // (`composites-seen`: those trained from the capture's own sparse points less those the
+        // objects hide from the training views; `composites-sfm` of 2026-11-29 to 2026-12-01 kept
+        // those too, `composites` before them started from depth samples, the synth rooms' way)
+        let reuse = reuse_composites.then(|| capture_cache.join("composites-seen").join(kept_as));
         let labels: Vec<u8> = spec.labels.split(',').map(|l| l.parse().unwrap()).collect();
         let truth = cogeo::synth::ground_truth(&data, &labels);
         assert!(truth.exact, "{}: no exact ground truth for removing {}", data.display(), spec.labels);

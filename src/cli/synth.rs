@@ -161,11 +161,13 @@ fn composite(a: &SynthArgs, capture: &std::path::Path) -> Result<()> {
     })?;
     bar.finish_and_clear();
     eprintln!(
-        "composited {} objects into {} views of {} ({} views with one object partly behind another) into {}",
+        "composited {} objects into {} views of {} ({} views with one object partly behind another; {} capture \
+         points left out, hidden by the objects) into {}",
         summary.objects.len(),
         summary.views,
         capture.display(),
         summary.views_with_overlap,
+        summary.points_hidden,
         a.out.display()
     );
     Ok(())

@@ -328,16 +328,7 @@ fn never_seen(
         .iter()
         .map(|point| {
             let Some(point) = *point else { return 0 };
-            let seen = train.iter().any(|&t| {
-                let Some((q, z)) = pixel_through(&cameras[t], lens, point) else { return false };
-                let (w, h) = (cameras[t].width as usize, cameras[t].height as usize);
-                let (x, y) = (q % w, q / w);
-                let rows = y.saturating_sub(reach)..(y + reach + 1).min(h);
-                rows.into_iter().any(|yy| {
-                    let cols = x.saturating_sub(reach)..(x + reach + 1).min(w);
-                    cols.into_iter().any(|xx| (depths[t][yy * w + xx] as f64 - z).abs() <= tolerance * z)
-                })
-            });
+            let seen = train.iter().any(|&t| seen_in(&cameras[t], lens, depths[t], point, tolerance, reach));
             if seen {
                 0
             } else {
@@ -345,6 +336,20 @@ fn never_seen(
             }
         })
         .collect()
+}
+
+/// Whether camera `cam` (with `lens`) sees `point`: some pixel of `depth` (its view's depth, 0
+/// where it shows nothing to match) within `reach` pixels of where the point lands is within
+/// `tolerance` (relative) of the point's view depth.
+fn seen_in(cam: &Camera, lens: Lens, depth: &[f32], point: V3, tolerance: f64, reach: usize) -> bool {
+    let Some((q, z)) = pixel_through(cam, lens, point) else { return false };
+    let (w, h) = (cam.width as usize, cam.height as usize);
+    let (x, y) = (q % w, q / w);
+    let rows = y.saturating_sub(reach)..(y + reach + 1).min(h);
+    rows.into_iter().any(|yy| {
+        let cols = x.saturating_sub(reach)..(x + reach + 1).min(w);
+        cols.into_iter().any(|xx| (depth[yy * w + xx] as f64 - z).abs() <= tolerance * z)
+    })
 }
 
 /// The pixel (row-major index) that camera `cam` with `lens` images `point` at, and its view depth.

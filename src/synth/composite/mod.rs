@@ -8,12 +8,13 @@
 //! loaded: undistorted and downscaled), depth/ and depth_background/ (EXR, camera z; the original
 //! scene's rendered depth, 0 where it is empty), unseen_mask/ (background that no training view
 //! sees past the objects), optional without_<labels>/, a COLMAP text model (one PINHOLE camera
-//! per image) and synth.json.
+//! per image; its points are the capture's, less those the objects stand on or hide from the
+//! training views, and points on the objects) and synth.json.
 
 mod ground;
 
 use super::raycast::{object_hit, shade, Object, V3};
-use super::{never_seen, subset_dir_name};
+use super::{never_seen, seen_in, subset_dir_name};
 use crate::gpu::Gpu;
 use crate::io::{write_atomic, write_exr, write_png, write_png_rgb};
 use crate::render::{RenderSettings, SceneRenderer};
@@ -80,6 +81,8 @@ pub struct CompositeSummary {
     pub views: usize,
     /// Views in which one object stands partly behind another.
     pub views_with_overlap: usize,
+    /// Capture sparse points left out because the objects hide them (`hidden_by_objects`).
+    pub points_hidden: usize,
 }
 
 /// The camera-z (median) depth of the original scene, treated as empty below this alpha.
@@ -98,6 +101,8 @@ const MIN_CAPTURE_POINTS: usize = 1000;
 /// A capture point within this fraction of an object's size of its surface (or inside it) is
 /// dropped: the object stands on it or hides it from every view.
 const SWALLOWED: f64 = 0.1;
+/// Training views a structure-from-motion point needs: it is triangulated from two.
+const MIN_TRIANGULATING_VIEWS: usize = 2;
 
 /// Composites the objects into the capture and writes the benchmark folder `out` (created; must
 /// be empty or absent).
@@ -207,6 +212,7 @@ pub fn composite(
         }
         progress("write", i + 1, count);
     }
+    let mut points_hidden = 0;
     let points = if data_points.len() >= MIN_CAPTURE_POINTS {
         // a composite trained from points sampled on the capture's rendered depth (which scatters
         // in front of and behind a fuzzy surface) rendered the cup's desk blurred and streaked:
@@ -216,7 +222,11 @@ pub fn composite(
             let local = ground.to_local(p);
             objects.iter().any(|o| o.sdf(local) < SWALLOWED * o.size)
         };
-        let mut points: Vec<Point3D> = data_points.iter().filter(|p| !swallowed(p.xyz)).cloned().collect();
+        let capture_depths: Vec<&[f32]> = views.iter().map(|v| &v.depth[..]).collect();
+        let hidden = hidden_by_objects(&data_points, &cameras, &train_views, &capture_depths, &background_depths);
+        points_hidden = hidden.iter().filter(|&&h| h).count();
+        let mut points: Vec<Point3D> =
+            data_points.iter().zip(&hidden).filter(|(p, &h)| !h && !swallowed(p.xyz)).map(|(p, _)| p.clone()).collect();
         let on_objects = |c: &Composited, p: usize| c.labels[p] != 0;
         points.extend(sparse_points(&views, &with_objects, &train_views, cfg.points, &on_objects, &mut rng));
         points
@@ -235,10 +245,40 @@ pub fn composite(
         "composite": cfg, "ground": ground, "objects": objects, "objects_world": world,
         "test_views": (0..count).filter(|&i| is_test_view(i)).collect::<Vec<_>>(),
         "views_with_one_object_behind_another": views_with_overlap,
+        "capture_points_hidden_by_objects": points_hidden,
     });
     let text = serde_json::to_string_pretty(&meta)?;
     write_atomic(&out.join("synth.json"), |w| w.write_all(text.as_bytes()).map_err(Into::into))?;
-    Ok(CompositeSummary { objects, ground, views: count, views_with_overlap })
+    Ok(CompositeSummary { objects, ground, views: count, views_with_overlap, points_hidden })
+}
+
+/// The capture's sparse points that a capture with the objects standing in it could not have:
+/// seen (`seen_in`) by fewer of the training views than MIN_TRIANGULATING_VIEWS, or than saw it
+/// without the objects where that is fewer, with the objects in them (`composite_depths`: the
+/// composited depths, 0 where an object covers the pixel) than without (`capture_depths`).
+/// Structure from motion found these points in photos of the scene without the objects, and
+/// kept, they start the composite's training with Gaussians of the true colours behind the
+/// objects where no training view sees: a leak of the ground truth into the never-seen region,
+/// which every removal that keeps the Gaussians left behind the objects (the nearest-copy
+/// baseline, removal only) shows. Points the capture's own depths do not confirm (their noise
+/// off the rendered surface) are kept: the objects took nothing from them.
+fn hidden_by_objects(
+    points: &[Point3D],
+    cameras: &[Camera],
+    train: &[usize],
+    capture_depths: &[&[f32]],
+    composite_depths: &[&[f32]],
+) -> Vec<bool> {
+    let seen_by = |depths: &[&[f32]], p: V3| {
+        train.iter().filter(|&&t| seen_in(&cameras[t], Lens::Pinhole, depths[t], p, SEEN_TOLERANCE, SEEN_REACH)).count()
+    };
+    let mut hidden = vec![false; points.len()];
+    crate::parallel::for_each_item(&mut hidden, &mut |_, _| {}, |i, h| {
+        let p = points[i].xyz;
+        let without = seen_by(capture_depths, p);
+        *h = without > 0 && seen_by(composite_depths, p) < without.min(MIN_TRIANGULATING_VIEWS);
+    });
+    hidden
 }
 
 /// The ground and objects of an earlier composite's synth.json (`placement`), which must hold
@@ -462,4 +502,65 @@ fn sparse_points(
         }
     }
     points
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Camera-z depth of the ground z = 0 through each pixel of `cam`, 0 where the ray meets the
+    /// box [-0.5, 0.5]^2 x [0, 1] first (`boxed`) or never meets the ground.
+    fn ground_depth(cam: &Camera, boxed: bool) -> Vec<f32> {
+        let (w, h) = (cam.width as usize, cam.height as usize);
+        let eye = cam.pixel_point(0, 0, 0.0);
+        (0..w * h)
+            .map(|p| {
+                let far = cam.pixel_point(p % w, p / w, 1.0);
+                let d = [far[0] - eye[0], far[1] - eye[1], far[2] - eye[2]];
+                if d[2] >= 0.0 {
+                    return 0.0;
+                }
+                let t_ground = -eye[2] / d[2];
+                // slab test against the box
+                let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+                for (a, (lo, hi)) in [(-0.5, 0.5), (-0.5, 0.5), (0.0, 1.0)].into_iter().enumerate() {
+                    let (u, v) = ((lo - eye[a]) / d[a], (hi - eye[a]) / d[a]);
+                    t0 = t0.max(u.min(v));
+                    t1 = t1.min(u.max(v));
+                }
+                if boxed && t0 <= t1 && t0 < t_ground {
+                    return 0.0;
+                }
+                t_ground as f32 // camera z, since `far` is at camera z 1
+            })
+            .collect()
+    }
+
+    /// Three cameras on one side of a unit box on the ground: the ground point right behind the box
+    /// is hidden from all of them and the points beside and in front of it are not; a point off
+    /// every surface (structure from motion's noise) is kept, since the box took nothing from it.
+    #[test]
+    fn points_the_box_hides_from_the_training_views_are_left_out() {
+        let cameras: Vec<Camera> = [-1.0, 0.0, 1.0]
+            .iter()
+            .map(|&x| Camera::look_at("c", 96, 96, 60.0, [x, -5.0, 2.0], [0.0, 0.0, 0.3], [0.0, 0.0, 1.0]))
+            .collect();
+        let without: Vec<Vec<f32>> = cameras.iter().map(|c| ground_depth(c, false)).collect();
+        let with: Vec<Vec<f32>> = cameras.iter().map(|c| ground_depth(c, true)).collect();
+        let capture: Vec<&[f32]> = without.iter().map(|d| &d[..]).collect();
+        let composite: Vec<&[f32]> = with.iter().map(|d| &d[..]).collect();
+        let point = |xyz: [f64; 3]| Point3D { xyz, rgb: [0; 3] };
+        let points = [
+            point([0.0, 0.9, 0.0]),  // behind the box from every camera
+            point([1.6, 0.0, 0.0]),  // beside it
+            point([0.0, -1.5, 0.0]), // in front of it
+            point([0.0, 2.0, 0.5]),  // in the air: no depth confirms it
+        ];
+        let hidden = hidden_by_objects(&points, &cameras, &[0, 1, 2], &capture, &composite);
+        assert_eq!(hidden, [true, false, false, false]);
+        // with only the middle camera training, the point behind the box is still hidden, and one
+        // camera suffices for the point in front
+        let hidden = hidden_by_objects(&points, &cameras, &[1], &capture, &composite);
+        assert_eq!(hidden, [true, false, false, false]);
+    }
 }
