@@ -169,7 +169,9 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
     never_seen_is_the_floor_no_training_view_sees(&cameras, &summary, &out);
 
     // the composite's sparse model: the capture's own points, less those the objects stand on
-    // or hide (within a tenth of their size of their surface), and points on the objects' surfaces
+    // (within a tenth of their size of their surface) or hide (fewer training views than two, or
+    // than saw it without them, see the point past the objects: the closed form of `blocked`),
+    // and points on the objects' surfaces
     let read_points = |dir: &Path| -> Vec<[f64; 3]> {
         cogeo::scene::dataset::read_capture(dir).unwrap().points.iter().map(|p| p.xyz).collect()
     };
@@ -179,19 +181,42 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
         let local = g.to_local(p);
         summary.objects.iter().map(|o| o.sdf(local) / o.size).fold(f64::INFINITY, f64::min)
     };
+    let train = training_views(&cameras);
+    let hidden = |c: [f64; 3]| {
+        let framing: Vec<_> = train.iter().filter(|v| v.project_to_image(c).is_some()).collect();
+        let past = framing.iter().filter(|v| !blocked(&summary, v.center(), c)).count();
+        !framing.is_empty() && past < framing.len().min(2)
+    };
+    // the depths' tolerance: a view sees a point where a pixel within one of where it lands shows
+    // its depth, so only points whose neighbours 1.5 pixels away on the floor (in every training
+    // view) share their verdict count, as the never-seen masks' 3 x 3 neighbourhoods do
+    let steady = |c: [f64; 3]| {
+        let step = train.iter().map(|v| 1.5 * v.to_camera(c)[2] / v.fx).fold(0.0, f64::max);
+        let offsets =
+            [(-1.0, -1.0), (0.0, -1.0), (1.0, -1.0), (-1.0, 0.0), (1.0, 0.0), (-1.0, 1.0), (0.0, 1.0), (1.0, 1.0)];
+        offsets.iter().all(|(i, j)| hidden([c[0] + i * step, c[1] + j * step, c[2]]) == hidden(c))
+    };
     let is_captured = |p: &[f64; 3]| captured.iter().any(|c| (0..3).all(|k| (c[k] - p[k]).abs() < 1e-9));
-    let (mut kept, mut swallowed) = (0, 0);
+    let (mut kept, mut swallowed, mut left_out, mut disagree) = (0, 0, 0, 0);
     for c in &captured {
         let in_model = model.iter().any(|p| (0..3).all(|k| (c[k] - p[k]).abs() < 1e-9));
         if surface_distance(*c) < 0.1 {
             assert!(!in_model, "capture point {c:?} under an object is in the composite's model");
             swallowed += 1;
+        } else if !steady(*c) {
+            continue;
+        } else if hidden(*c) {
+            left_out += 1;
+            disagree += in_model as usize;
         } else {
-            assert!(in_model, "capture point {c:?} away from the objects is missing from the composite's model");
             kept += 1;
+            disagree += !in_model as usize;
         }
     }
-    assert!(swallowed > 0 && kept > 2000, "{swallowed} capture points swallowed, {kept} kept");
+    eprintln!("steady capture points: {kept} seen, {left_out} hidden, {disagree} against the closed form; {swallowed} swallowed");
+    assert!(swallowed > 0 && kept > 2000 && left_out > 20, "{swallowed} swallowed, {kept} seen, {left_out} hidden");
+    // 1 % of them: keeping every hidden point (the rule before) is 49 of 2801 here
+    assert!(disagree * 100 <= kept + left_out, "{disagree} capture points disagree with the closed form of hiding");
     let on_objects: Vec<f64> = model.iter().filter(|p| !is_captured(p)).map(|&p| surface_distance(p)).collect();
     assert!(on_objects.len() > 20, "only {} points on the objects", on_objects.len());
     for d in &on_objects {
@@ -235,24 +260,8 @@ fn never_seen_is_the_floor_no_training_view_sees(
     summary: &cogeo::synth::composite::CompositeSummary,
     out: &Path,
 ) {
-    let g = &summary.ground;
-    let blocked = |from: [f64; 3], to: [f64; 3]| {
-        let d = [to[0] - from[0], to[1] - from[1], to[2] - from[2]];
-        let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let mut t = 0.0;
-        while t < length - 1e-6 * length {
-            let q = [from[0] + d[0] * t / length, from[1] + d[1] * t / length, from[2] + d[2] * t / length];
-            let local = g.to_local(q);
-            let sdf = summary.objects.iter().map(|o| o.sdf(local)).fold(f64::INFINITY, f64::min);
-            if sdf < 1e-7 * length {
-                return true;
-            }
-            t += sdf;
-        }
-        false
-    };
-    let train: Vec<&cogeo::scene::Camera> =
-        cameras.iter().enumerate().filter(|(i, _)| !cogeo::scene::dataset::is_test_view(*i)).map(|(_, c)| c).collect();
+    let blocked = |from: [f64; 3], to: [f64; 3]| blocked(summary, from, to);
+    let train = training_views(cameras);
     let (mut agree, mut disagree, mut closed_form_unseen) = (0usize, 0usize, 0usize);
     for cam in cameras {
         let (w, h) = (cam.width as usize, cam.height as usize);
@@ -295,4 +304,27 @@ fn never_seen_is_the_floor_no_training_view_sees(
         "never-seen masks disagree with the closed form on {disagree} of {} object pixels",
         agree + disagree
     );
+}
+
+/// Whether the segment `from` -> `to` passes through one of the objects (sphere-traced on their
+/// exact distance functions).
+fn blocked(summary: &cogeo::synth::composite::CompositeSummary, from: [f64; 3], to: [f64; 3]) -> bool {
+    let g = &summary.ground;
+    let d = [to[0] - from[0], to[1] - from[1], to[2] - from[2]];
+    let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    let mut t = 0.0;
+    while t < length - 1e-6 * length {
+        let q = [from[0] + d[0] * t / length, from[1] + d[1] * t / length, from[2] + d[2] * t / length];
+        let local = g.to_local(q);
+        let sdf = summary.objects.iter().map(|o| o.sdf(local)).fold(f64::INFINITY, f64::min);
+        if sdf < 1e-7 * length {
+            return true;
+        }
+        t += sdf;
+    }
+    false
+}
+
+fn training_views(cameras: &[cogeo::scene::Camera]) -> Vec<&cogeo::scene::Camera> {
+    cameras.iter().enumerate().filter(|(i, _)| !cogeo::scene::dataset::is_test_view(*i)).map(|(_, c)| c).collect()
 }
