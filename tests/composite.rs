@@ -325,6 +325,7 @@ fn blocked(summary: &cogeo::synth::composite::CompositeSummary, from: [f64; 3], 
     false
 }
 
+/// The cameras the composite's training (and its never-seen test) uses: all but the held-out ones.
 fn training_views(cameras: &[cogeo::scene::Camera]) -> Vec<&cogeo::scene::Camera> {
     cameras.iter().enumerate().filter(|(i, _)| !cogeo::scene::dataset::is_test_view(*i)).map(|(_, c)| c).collect()
 }

@@ -258,10 +258,10 @@ pub fn composite(
 /// composited depths, 0 where an object covers the pixel) than without (`capture_depths`).
 /// Structure from motion found these points in photos of the scene without the objects, and
 /// kept, they start the composite's training with Gaussians of the true colours behind the
-/// objects where no training view sees: a leak of the ground truth into the never-seen region,
-/// which every removal that keeps the Gaussians left behind the objects (the nearest-copy
-/// baseline, removal only) shows. Points the capture's own depths do not confirm (their noise
-/// off the rendered surface) are kept: the objects took nothing from them.
+/// objects where no training view sees: a leak of the ground truth into the never-seen region for
+/// every removal that keeps the Gaussians left behind the objects (nearest-copy, removal only).
+/// Points the capture's own depths do not confirm (their noise off the rendered surface) are
+/// kept: the objects took nothing from them.
 fn hidden_by_objects(
     points: &[Point3D],
     cameras: &[Camera],
