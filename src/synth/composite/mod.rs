@@ -212,8 +212,7 @@ pub fn composite(
         }
         progress("write", i + 1, count);
     }
-    let mut points_hidden = 0;
-    let points = if data_points.len() >= MIN_CAPTURE_POINTS {
+    let (points, points_hidden) = if data_points.len() >= MIN_CAPTURE_POINTS {
         // a composite trained from points sampled on the capture's rendered depth (which scatters
         // in front of and behind a fuzzy surface) rendered the cup's desk blurred and streaked:
         // held-out PSNR 25.3 against the capture's own training's 26.3; from the capture's points
@@ -224,14 +223,13 @@ pub fn composite(
         };
         let capture_depths: Vec<&[f32]> = views.iter().map(|v| &v.depth[..]).collect();
         let hidden = hidden_by_objects(&data_points, &cameras, &train_views, &capture_depths, &background_depths);
-        points_hidden = hidden.iter().filter(|&&h| h).count();
         let mut points: Vec<Point3D> =
             data_points.iter().zip(&hidden).filter(|(p, &h)| !h && !swallowed(p.xyz)).map(|(p, _)| p.clone()).collect();
         let on_objects = |c: &Composited, p: usize| c.labels[p] != 0;
         points.extend(sparse_points(&views, &with_objects, &train_views, cfg.points, &on_objects, &mut rng));
-        points
+        (points, hidden.iter().filter(|&&h| h).count())
     } else {
-        sparse_points(&views, &with_objects, &train_views, cfg.points, &|_, _| true, &mut rng)
+        (sparse_points(&views, &with_objects, &train_views, cfg.points, &|_, _| true, &mut rng), 0)
     };
     super::capture_files::write_pinhole_model(&cameras, &points, out)?;
     let views_with_overlap = with_objects.iter().filter(|c| c.overlaps >= 20).count();
