@@ -184,7 +184,7 @@ fn objects_stand_on_the_capture_plane_and_only_their_pixels_change() {
     let train = training_views(&cameras);
     let hidden = |c: [f64; 3]| {
         let framing: Vec<_> = train.iter().filter(|v| v.project_to_image(c).is_some()).collect();
-        let past = framing.iter().filter(|v| !blocked(&summary, v.center(), c)).count();
+        let past = framing.iter().filter(|v| sees_past_objects(&summary, v, c)).count();
         !framing.is_empty() && past < framing.len().min(2)
     };
     // the depths' tolerance: a view sees a point where a pixel within one of where it lands shows
@@ -264,7 +264,6 @@ fn never_seen_is_the_floor_no_training_view_sees(
     summary: &cogeo::synth::composite::CompositeSummary,
     out: &Path,
 ) {
-    let blocked = |from: [f64; 3], to: [f64; 3]| blocked(summary, from, to);
     let train = training_views(cameras);
     let (mut agree, mut disagree, mut closed_form_unseen) = (0usize, 0usize, 0usize);
     for cam in cameras {
@@ -279,7 +278,7 @@ fn never_seen_is_the_floor_no_training_view_sees(
                 let t = -center[2] / dir[2];
                 (t > 0.0).then(|| {
                     let floor = [center[0] + t * dir[0], center[1] + t * dir[1], 0.0];
-                    !train.iter().any(|v| v.project_to_image(floor).is_some() && !blocked(v.center(), floor))
+                    !train.iter().any(|v| sees_past_objects(summary, v, floor))
                 })
             })
             .collect();
@@ -327,6 +326,15 @@ fn blocked(summary: &cogeo::synth::composite::CompositeSummary, from: [f64; 3], 
         t += sdf;
     }
     false
+}
+
+/// Whether `view` frames `point` and the segment from its center to it passes through no object.
+fn sees_past_objects(
+    summary: &cogeo::synth::composite::CompositeSummary,
+    view: &cogeo::scene::Camera,
+    point: [f64; 3],
+) -> bool {
+    view.project_to_image(point).is_some() && !blocked(summary, view.center(), point)
 }
 
 /// The cameras the composite's training (and its never-seen test) uses: all but the held-out ones.
