@@ -391,17 +391,20 @@ fn loss_masks_weigh_each_pixel() {
 /// times the gradient's sign, so an element whose gradient is rounding noise can step either way
 /// from run to run: the scales are anisotropic (an isotropic Gaussian's rotation gradient is
 /// nothing but that noise), and a few movable Gaussians may differ from the run without flags.
+/// A Gaussian marked view-independent steps its first SH band and keeps the higher ones, bit
+/// for bit, while they render.
 #[test]
 fn only_movable_gaussians_step() {
     use cogeo::scene::GaussianScene;
-    use cogeo::train::trainer::{TrainConfig, Trainer};
+    use cogeo::train::trainer::{Motion, TrainConfig, Trainer};
     let (gpu, mut scene, data) = one_view_scene(12, 300, 1, [1.0, 0.0, 0.2, 0.0]);
     for (i, s) in scene.log_scales.iter_mut().enumerate() {
         *s = [-2.2 - 0.1 * (i % 5) as f32, -2.6, -3.0 + 0.2 * (i % 3) as f32];
     }
     let movable: Vec<bool> = (0..scene.len()).map(|i| i % 3 == 0).collect();
+    let motions: Vec<Motion> = movable.iter().map(|&m| if m { Motion::Free } else { Motion::Held }).collect();
     let cfg = || TrainConfig { iters: 10, densify: false, ..Default::default() };
-    let run = |flags: Option<&[bool]>, steps: usize| {
+    let run = |flags: Option<&[Motion]>, steps: usize| {
         let mut t = Trainer::new(&gpu, &data, &scene, cfg()).unwrap();
         t.trust_radius = Some(1e-2);
         if let Some(f) = flags {
@@ -421,7 +424,7 @@ fn only_movable_gaussians_step() {
         v.extend(s.sh[i * k..(i + 1) * k].iter().map(|x| x.to_bits()));
         v
     };
-    let (plain, masked) = (run(None, 1), run(Some(&movable), 1));
+    let (plain, masked) = (run(None, 1), run(Some(&motions), 1));
     let moved = (0..scene.len()).filter(|&i| bits(&plain, i) != bits(&scene, i)).count();
     assert!(moved > 200, "one step moved only {moved} of {} Gaussians", scene.len());
     for i in (0..scene.len()).filter(|&i| !movable[i]) {
@@ -433,22 +436,46 @@ fn only_movable_gaussians_step() {
     let off: Vec<usize> = (0..scene.len()).filter(|&i| movable[i] && differ(i)).collect();
     println!("movable Gaussians whose first step differs from the run without flags: {off:?}");
     assert!(off.len() <= 2, "{} of 100 movable Gaussians stepped otherwise than without flags: {off:?}", off.len());
-    let later = run(Some(&movable), 4);
+    let later = run(Some(&motions), 4);
     for i in (0..scene.len()).filter(|&i| !movable[i]) {
         assert_eq!(bits(&later, i), bits(&scene, i), "held Gaussian {i} moved over 4 steps");
     }
     let moved_later = (0..scene.len()).filter(|&i| movable[i] && bits(&later, i) != bits(&masked, i)).count();
     assert!(moved_later > 60, "the movable Gaussians stopped after one step ({moved_later} moved on)");
 
+    // band 1 rendered from the first step: a third free, a third view-independent, a third held
+    let mixed: Vec<Motion> =
+        (0..scene.len()).map(|i| [Motion::Free, Motion::ViewIndependent, Motion::Held][i % 3]).collect();
     let mut t = Trainer::new(&gpu, &data, &scene, cfg()).unwrap();
-    let err = t.set_movable(&movable[1..]).unwrap_err().to_string();
+    t.fixed_sh_degree = Some(1);
+    t.set_movable(&mixed).unwrap();
+    for _ in 0..4 {
+        t.iterate(&data, false).unwrap();
+    }
+    let stepped = t.download_scene().unwrap();
+    let k = 3 * 4; // SH coefficients per Gaussian at degree 1
+    let dc = |s: &GaussianScene, i: usize| s.sh[i * k..i * k + 3].to_vec();
+    let higher = |s: &GaussianScene, i: usize| s.sh[i * k + 3..(i + 1) * k].to_vec();
+    let (mut dc_moved, mut higher_moved) = ([0; 3], [0; 3]);
+    for i in 0..scene.len() {
+        dc_moved[i % 3] += (dc(&stepped, i) != dc(&scene, i)) as usize;
+        higher_moved[i % 3] += (higher(&stepped, i) != higher(&scene, i)) as usize;
+    }
+    assert_eq!(higher_moved[1..], [0, 0], "view-independent or held Gaussians stepped their higher bands");
+    assert_eq!(dc_moved[2], 0, "held Gaussians stepped");
+    assert!(dc_moved[0] > 90 && dc_moved[1] > 90, "first bands stepped (free, view-independent): {dc_moved:?}");
+    assert!(higher_moved[0] > 90, "higher bands of free Gaussians stepped: {higher_moved:?}");
+
+    let motions_short = &motions[1..];
+    let mut t = Trainer::new(&gpu, &data, &scene, cfg()).unwrap();
+    let err = t.set_movable(motions_short).unwrap_err().to_string();
     assert!(err.contains("299 movable flags for 300 Gaussians"), "{err}");
-    t.set_movable(&movable).unwrap();
+    t.set_movable(&motions).unwrap();
     t.fused_step = false;
     let err = t.iterate(&data, false).unwrap_err().to_string();
     assert!(err.contains("need the fused step"), "{err}");
     let mut t = Trainer::new(&gpu, &data, &scene, TrainConfig { densify: true, ..cfg() }).unwrap();
-    assert!(t.set_movable(&movable).is_err(), "densification reorders the Gaussians");
+    assert!(t.set_movable(&motions).is_err(), "densification reorders the Gaussians");
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }
 

@@ -23,7 +23,7 @@ struct FusedAdamParams {
     params: [u64; 5],
     /// (m, v) per group, in the order of `params`.
     moments: [[u64; 2]; 5],
-    /// u32 per Gaussian, 0: no update (`Trainer::set_movable`); 0 and unread when all move.
+    /// u32 per Gaussian, its `trainer::Motion` (`Trainer::set_movable`); 0 and unread when all move.
     movable: u64,
     steps: [AdamStep; 5],
     opacity_reg: f32,
@@ -86,8 +86,9 @@ impl ProjectBackwardAdam {
     /// channel are stepped: the caller guarantees the others have zero moments and get no gradient
     /// (bands not rendered yet), so a step would leave them unchanged. With `trust_radius` each
     /// Gaussian's update of its position, of its log-scales and of its rotation is clipped to that
-    /// norm (as `Adam::record_clipped`). With `movable` (a u32 per Gaussian) only the Gaussians
-    /// it marks nonzero step; the others keep their parameters and moments. The constants go to one
+    /// norm (as `Adam::record_clipped`). With `movable` (a `trainer::Motion` per Gaussian) only the
+    /// Gaussians it marks step, the view-independent ones all but their higher SH bands; the
+    /// others keep their parameters and moments. The constants go to one
     /// host-visible block: one recording per submission.
     #[allow(clippy::too_many_arguments)]
     pub fn record(

@@ -47,6 +47,20 @@ impl Frozen {
     }
 }
 
+/// How one Gaussian may step (`Trainer::set_movable`); the values are the shader's
+/// (project_backward_adam.comp).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Motion {
+    /// Neither its parameters nor its moments change.
+    Held = 0,
+    /// Every parameter steps.
+    Free = 1,
+    /// Every parameter steps but the SH bands above the first, which keep their values: its
+    /// color is the same from every direction unless it had view dependence already.
+    ViewIndependent = 2,
+}
+
 /// Learning rates (conventions.md, INRIA defaults).
 pub const LR_POSITION_INIT: f64 = 1.6e-4;
 pub const LR_POSITION_FINAL: f64 = 1.6e-6;
@@ -143,8 +157,9 @@ pub struct Trainer {
     /// gradients and running Adam per tensor; on by default.
     pub fused_step: bool,
     fused: ProjectBackwardAdam,
-    /// Set by `set_movable`: a u32 per Gaussian, 0 for one that never steps; and how many step.
-    movable: Option<(Buffer, u32)>,
+    /// Set by `set_movable`: a `Motion` per Gaussian as a u32; and how many step all their
+    /// parameters and how many all but the higher SH bands.
+    movable: Option<(Buffer, [u32; 2])>,
     /// SH coefficients per channel whose Adam moments may be nonzero: those of every band rendered
     /// so far (the fused step leaves the rest alone, an exact no-op for them).
     sh_stepped: u32,
@@ -240,11 +255,12 @@ impl Trainer {
         Ok(())
     }
 
-    /// Only the Gaussians `movable` marks (one flag per Gaussian, in the scene's order) step from
-    /// now on; the others still render and pass gradients on, but their parameters and Adam
-    /// moments never change (the removal's refinement holds the scene away from the holes still).
-    /// Needs the fused step, no densification (it would reorder the Gaussians) and the ADC strategy.
-    pub fn set_movable(&mut self, movable: &[bool]) -> Result<()> {
+    /// Only the Gaussians `movable` marks (one `Motion` per Gaussian, in the scene's order) step
+    /// from now on; the held ones still render and pass gradients on, but their parameters and
+    /// Adam moments never change (the removal's refinement holds the scene away from the holes
+    /// still). Needs the fused step, no densification (it would reorder the Gaussians) and the
+    /// ADC strategy.
+    pub fn set_movable(&mut self, movable: &[Motion]) -> Result<()> {
         if movable.len() != self.scene.num_gaussians as usize {
             anyhow::bail!("{} movable flags for {} Gaussians", movable.len(), self.scene.num_gaussians);
         }
@@ -255,7 +271,8 @@ impl Trainer {
             anyhow::bail!("movable Gaussians with the MCMC strategy: its position noise moves every Gaussian");
         }
         let flags: Vec<u32> = movable.iter().map(|&m| m as u32).collect();
-        let moving = flags.iter().sum();
+        let count = |motion| movable.iter().filter(|&&m| m == motion).count() as u32;
+        let moving = [count(Motion::Free), count(Motion::ViewIndependent)];
         self.movable = Some((Buffer::from_slice(&self.gpu, "movable Gaussians", &flags)?, moving));
         Ok(())
     }
@@ -424,8 +441,11 @@ impl Trainer {
         )?;
         // a held Gaussian reads its flag only
         let bytes = match self.movable {
-            Some((_, moving)) => {
-                moving as u64 * super::fused::bytes_per_gaussian(stepped) + 4 * (s.num_gaussians - moving) as u64
+            Some((_, [free, first_band])) => {
+                let held = s.num_gaussians - free - first_band;
+                free as u64 * super::fused::bytes_per_gaussian(stepped)
+                    + first_band as u64 * super::fused::bytes_per_gaussian(stepped.min(1))
+                    + 4 * held as u64
             }
             None => s.num_gaussians as u64 * super::fused::bytes_per_gaussian(stepped),
         };

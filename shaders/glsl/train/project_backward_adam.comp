@@ -20,7 +20,8 @@ layout(buffer_reference, std430, buffer_reference_align = 8) buffer FusedAdam {
     Floats m_quats; Floats v_quats;
     Floats m_opacity; Floats v_opacity;
     Floats m_sh; Floats v_sh;
-    Uints movable;         // per Gaussian, 0: no update (read only when `frozen & 32` is set)
+    Uints movable;         // per Gaussian (`Motion`): 0 no update, 1 update, 2 update all but the
+                           // SH bands above the first (read only when `frozen & 32` is set)
     AdamStep step_means; AdamStep step_log_scales; AdamStep step_quats; AdamStep step_opacity;
     AdamStep step_sh;      // lr for the DC coefficient, lr_tail for the higher bands
     float opacity_reg;     // 3DGS-MCMC regularizer weights over N (opacity) and 3N (scales); 0 = off
@@ -47,7 +48,8 @@ void main() {
     uint g = linear_group_id() * 256 + gl_LocalInvocationID.x;
     if (g >= p.num_gaussians) return;
     // a Gaussian held still: neither it, its moments nor its densification statistics change
-    if ((a.frozen & 32u) != 0u && a.movable.v[g] == 0u) return;
+    uint motion = (a.frozen & 32u) != 0u ? a.movable.v[g] : 1u;
+    if (motion == 0u) return;
     ParamGrads d;
     parameter_grads(p, b, g, d);  // zero when culled
     // Everything read from the parameter blocks is copied to locals first: the stores below could
@@ -94,7 +96,7 @@ void main() {
         AdamStep s = a.step_sh;  // lr: the DC coefficient, lr_tail: higher bands
         // Coefficients at and above sh_stepped belong to bands never rendered yet (the degree grows
         // during training): zero gradient and zero moments, where an Adam step changes nothing.
-        uint K = p.sh_coeffs, stepped = a.sh_stepped;
+        uint K = p.sh_coeffs, stepped = motion == 2u ? 1u : a.sh_stepped;
         // The rendered bands first, in a loop of constant length (the basis stays in registers),
         // then those stepped before at a higher degree, if any, with zero gradient.
         for (uint k = 0; k < SH_BANDS; k++) {
