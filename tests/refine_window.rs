@@ -147,11 +147,13 @@ fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render(
 /// The refinement moves the patch Gaussians (the last of the scene) and those whose centre lands
 /// in some view's hole, however small or large; a centre beside every hole, behind the camera or
 /// outside the image holds still, even when its footprint reaches into a hole
-/// (`movable_gaussians`).
+/// (`movable_gaussians`); which of the movers keep their higher SH bands follows
+/// `--refine-view-dependence`.
 #[test]
 fn the_gaussians_the_holes_show_and_the_patch_move() {
-    use cogeo::removal::refine::movable_gaussians;
+    use cogeo::removal::refine::{movable_gaussians, ViewDependence};
     use cogeo::scene::GaussianScene;
+    use cogeo::train::trainer::Motion::{Free, Held, ViewIndependent};
     let (a, b) = (test_camera(80, 60), test_camera(40, 30));
     let hole_a: Vec<bool> =
         (0..80 * 60).map(|i| (30..40).contains(&(i % 80)) && (20..26).contains(&(i / 80))).collect();
@@ -177,8 +179,14 @@ fn the_gaussians_the_holes_show_and_the_patch_move() {
     for (m, s) in gaussians {
         scene.push(m, [s; 3], [1.0, 0.0, 0.0, 0.0], 0.0, &[0.5; 3]);
     }
-    let movable = movable_gaussians(&scene, &[a.clone(), b.clone()], &[&hole_a, &hole_b], 2);
-    assert_eq!(movable, [true, true, true, false, false, true, false, true, true]);
-    let holes_only = movable_gaussians(&scene, &[a], &[&hole_a], 0);
-    assert_eq!(holes_only, [true, true, true, false, false, false, false, false, true]);
+    let both = [a.clone(), b.clone()];
+    let movable = movable_gaussians(&scene, &both, &[&hole_a, &hole_b], 2, ViewDependence::Kept);
+    let (f, h, v) = (Free, Held, ViewIndependent);
+    assert_eq!(movable, [f, f, f, h, h, f, h, v, v]);
+    let all = movable_gaussians(&scene, &both, &[&hole_a, &hole_b], 2, ViewDependence::All);
+    assert_eq!(all, [f, f, f, h, h, f, h, f, f]);
+    let none = movable_gaussians(&scene, &both, &[&hole_a, &hole_b], 2, ViewDependence::None);
+    assert_eq!(none, [v, v, v, h, h, v, h, v, v]);
+    let holes_only = movable_gaussians(&scene, &[a], &[&hole_a], 0, ViewDependence::Kept);
+    assert_eq!(holes_only, [f, f, f, h, h, h, h, h, f]);
 }

@@ -449,8 +449,8 @@ fn refine_views(
     let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
     let mut masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
     let mut targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
-    let movable =
-        (!opts.refine.all_gaussians).then(|| refine::movable_gaussians(scene, cameras, &holes, patch_gaussians));
+    let movable = (!opts.refine.all_gaussians)
+        .then(|| refine::movable_gaussians(scene, cameras, &holes, patch_gaussians, opts.refine.view_dependence));
     let mut cameras = cameras.to_vec();
     let mut windows = vec![None; cameras.len()];
     if !opts.refine.whole_views {

@@ -18,7 +18,7 @@ use crate::image_ops::{bounding_box, crop, including, Rect};
 use crate::render::{reference, RenderSettings};
 use crate::scene::dataset::{Dataset, View};
 use crate::scene::{Camera, GaussianScene};
-use crate::train::trainer::{Frozen, TrainConfig, Trainer};
+use crate::train::trainer::{Frozen, Motion, TrainConfig, Trainer};
 use anyhow::Result;
 
 /// The refinement's SH learning rates as a multiple of training's. On the bench scenes 150
@@ -68,6 +68,16 @@ pub const DEFAULT_ITERS: u32 = 150;
 /// (at 300 statue-one scored 20.18 / 0.346 against 20.30 / 0.348), and so does the `remove`
 /// speed goal measured on it.
 pub const MIN_PASSES: u32 = 6;
+
+/// Which moving Gaussians learn view-dependent color by default: all. Held-out masked PSNR /
+/// LPIPS with `all`, `kept` (the patch view-independent) and `none` (bench/JOURNAL.md,
+/// 2026-12-01): statue-one 20.93 / 0.246, 21.00 / 0.259, 21.01 / 0.259; statue-two-of-three
+/// 21.75 / 0.250, 21.78 / 0.257, 21.79 / 0.257; cup-one 26.79 / 0.189, 26.89 / 0.192, 26.83 /
+/// 0.178; cup-two-of-three 28.65 / 0.119, 28.70 / 0.121, 28.70 / 0.124. Averaging the views'
+/// fills gains at most 0.1 dB and costs LPIPS on three scenes of four. On
+/// cup-one at 1200 iterations the patch view-independent still fell to 25.63 / 0.199 (25.55 /
+/// 0.204 with all), so view dependence is not what the longer refinement overfits with.
+pub const VIEW_DEPENDENCE: ViewDependence = ViewDependence::All;
 
 /// Refinement settings: the one home of their defaults, also `cogeo remove`'s flags.
 #[derive(Clone, Debug, serde::Serialize, clap::Args)]
@@ -128,6 +138,30 @@ pub struct RefineConfig {
     /// the rest of the scene renders unchanged, as trained on the photos.
     #[arg(id = "refine-all-gaussians", long = "refine-all-gaussians")]
     pub all_gaussians: bool,
+    /// Which moving Gaussians may learn view-dependent color (SH bands above the first) in the
+    /// refinement; the others keep their higher bands as they are (`Motion::ViewIndependent`).
+    /// A patch of one color per direction cannot show each view its own fill, but it averages
+    /// the views' inventions where they disagree: on the real composites `kept` and `none` raised
+    /// held-out masked PSNR by up to 0.1 dB and blurred the texture (`VIEW_DEPENDENCE`).
+    #[arg(
+        id = "refine-view-dependence",
+        long = "refine-view-dependence",
+        value_enum,
+        default_value_t = VIEW_DEPENDENCE
+    )]
+    pub view_dependence: ViewDependence,
+}
+
+/// Which of the refinement's moving Gaussians step their SH bands above the first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+pub enum ViewDependence {
+    /// All of them.
+    All,
+    /// The scene's own only: the patch Gaussians (zero higher bands from the fusion) keep one
+    /// color for every direction.
+    Kept,
+    /// None: every moving Gaussian keeps the higher bands it has.
+    None,
 }
 
 crate::default_from_flags!(RefineConfig);
@@ -167,14 +201,30 @@ pub struct RefineReport {
 /// further from its own targets than it began, and the held-out views lost 0.6 dB outside the
 /// masks. Moving also those whose footprint reaches a hole pixel within two deviations let them
 /// drift again (cup 0.2 dB outside, statue 0.07 dB in the masks; bench/JOURNAL.md, 2026-11-27).
-pub fn movable_gaussians(scene: &GaussianScene, cameras: &[Camera], holes: &[&[bool]], patch: usize) -> Vec<bool> {
+pub fn movable_gaussians(
+    scene: &GaussianScene,
+    cameras: &[Camera],
+    holes: &[&[bool]],
+    patch: usize,
+    view_dependence: ViewDependence,
+) -> Vec<Motion> {
     let first_patch = scene.len() - patch;
     let in_a_hole = |i: usize| {
         let m = scene.means[i].map(f64::from);
         cameras.iter().zip(holes).any(|(cam, hole)| cam.pixel_of(m).is_some_and(|(q, _)| hole[q]))
     };
-    let mut movable: Vec<bool> = (0..scene.len()).map(|i| i >= first_patch).collect();
-    crate::parallel::for_each_item(&mut movable, &mut |_, _| {}, |i, m| *m = *m || in_a_hole(i));
+    let (kept, new) = match view_dependence {
+        ViewDependence::All => (Motion::Free, Motion::Free),
+        ViewDependence::Kept => (Motion::Free, Motion::ViewIndependent),
+        ViewDependence::None => (Motion::ViewIndependent, Motion::ViewIndependent),
+    };
+    let mut movable: Vec<Motion> =
+        (0..scene.len()).map(|i| if i >= first_patch { new } else { Motion::Held }).collect();
+    crate::parallel::for_each_item(&mut movable, &mut |_, _| {}, |i, m| {
+        if *m == Motion::Held && in_a_hole(i) {
+            *m = kept;
+        }
+    });
     movable
 }
 
@@ -242,7 +292,7 @@ pub fn refine(
     cameras: &[Camera],
     targets: Vec<Vec<f32>>,
     masks: Option<&[Vec<f32>]>,
-    movable: Option<&[bool]>,
+    movable: Option<&[Motion]>,
     extent: f64,
     cfg: &RefineConfig,
     mut progress: impl FnMut(u32),
@@ -286,9 +336,9 @@ pub fn refine(
     let moved = match movable {
         Some(movable) => {
             assert_eq!(movable.len(), scene.len(), "a movable flag per Gaussian");
-            let of_part: Vec<bool> = movable.iter().zip(&seen).filter(|(_, &s)| s || all).map(|(&m, _)| m).collect();
+            let of_part: Vec<Motion> = movable.iter().zip(&seen).filter(|(_, &s)| s || all).map(|(&m, _)| m).collect();
             t.set_movable(&of_part)?;
-            of_part.iter().filter(|&&m| m).count()
+            of_part.iter().filter(|&&m| m != Motion::Held).count()
         }
         None => t.num_gaussians() as usize,
     };
