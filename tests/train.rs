@@ -466,9 +466,8 @@ fn only_movable_gaussians_step() {
     assert!(dc_moved[0] > 90 && dc_moved[1] > 90, "first bands stepped (free, view-independent): {dc_moved:?}");
     assert!(higher_moved[0] > 90, "higher bands of free Gaussians stepped: {higher_moved:?}");
 
-    let motions_short = &motions[1..];
     let mut t = Trainer::new(&gpu, &data, &scene, cfg()).unwrap();
-    let err = t.set_movable(motions_short).unwrap_err().to_string();
+    let err = t.set_movable(&motions[1..]).unwrap_err().to_string();
     assert!(err.contains("299 movable flags for 300 Gaussians"), "{err}");
     t.set_movable(&motions).unwrap();
     t.fused_step = false;

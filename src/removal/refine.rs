@@ -140,7 +140,7 @@ pub struct RefineConfig {
     pub all_gaussians: bool,
     /// Which moving Gaussians may learn view-dependent color (SH bands above the first) in the
     /// refinement; the others keep their higher bands as they are (`Motion::ViewIndependent`).
-    /// A patch of one color per direction cannot show each view its own fill, but it averages
+    /// A patch of one color for every direction cannot show each view its own fill, but it averages
     /// the views' inventions where they disagree: on the real composites `kept` and `none` raised
     /// held-out masked PSNR by up to 0.1 dB and blurred the texture (`VIEW_DEPENDENCE`).
     #[arg(

@@ -102,3 +102,34 @@ pub enum Strategy {
     /// and scale regularizers, position noise (train/mcmc.rs).
     Mcmc,
 }
+
+/// Which parameter groups are frozen (no update).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct Frozen {
+    pub means: bool,
+    pub log_scales: bool,
+    pub quats: bool,
+    pub opacity: bool,
+    pub sh: bool,
+}
+
+impl Frozen {
+    /// Geometry (means, scales, rotations) frozen; color and opacity train.
+    pub fn geometry() -> Frozen {
+        Frozen { means: true, log_scales: true, quats: true, ..Default::default() }
+    }
+}
+
+/// How one Gaussian may step (`Trainer::set_movable`); the values are the shader's
+/// (project_backward_adam.comp).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum Motion {
+    /// Neither its parameters nor its moments change.
+    Held = 0,
+    /// Every parameter steps.
+    Free = 1,
+    /// Every parameter steps but the SH bands above the first, which keep their values: its
+    /// color is the same from every direction unless it had view dependence already.
+    ViewIndependent = 2,
+}
