@@ -129,6 +129,32 @@ impl Inpainter {
             }
         }
     }
+
+    /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more
+    /// pixels known), keeping each surface's colors on that surface where the built-in inpainter
+    /// is used (`guide`: the surface labels, the completed disparity, the planes and the view's
+    /// intrinsics); `avoid` pixels stay but lend the exemplar fill no texture. With the exemplar,
+    /// also which surfaces' texture repeats (`exemplar::RectifiedFill::repeats`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn inpaint_again(
+        &self,
+        index: usize,
+        image: &[f32],
+        fill: &[bool],
+        avoid: &[bool],
+        (labels, disparity, planes, k): (&[u8], &[f32], &[crate::planes::Plane], &super::rectify::Intrinsics),
+        w: usize,
+        h: usize,
+    ) -> Result<(Vec<f32>, Option<[bool; 256]>)> {
+        match self {
+            Inpainter::Harmonic => Ok((super::surfaces::fill_by_surface(image, fill, labels, w, h, 3), None)),
+            Inpainter::Exemplar(e) => {
+                let filled = e.fill_rectified(image, fill, avoid, labels, Some(disparity), planes, k, w, h)?;
+                Ok((filled.rgb, Some(filled.repeats)))
+            }
+            Inpainter::Onnx(_) | Inpainter::Provided { .. } => Ok((self.inpaint_view(index, image, fill, w, h)?, None)),
+        }
+    }
 }
 
 /// The context window around a hole: the box grown by half its size (at least `min_margin`),

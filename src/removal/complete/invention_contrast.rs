@@ -6,18 +6,30 @@
 //! where the photo's do not. Against the truth such a copy costs its own variance on top of the
 //! truth's, where a fill of the local mean alone costs the truth's only (the perception-distortion
 //! trade): on the real-photo bench the statue's never-seen lawn scored under the nearest-copy
-//! baseline's blur on masked PSNR while far ahead of it on LPIPS. Each such invented pixel becomes
-//! m + contrast (v - m), m the mean of the invented pixels of its own surface within
-//! `CONTRAST_RADIUS`: contrast 1 keeps the copy as it is, 0 leaves the local mean. A texture that
-//! repeats (a checkerboard, bricks) is continued in phase with the truth, and lowering its
-//! contrast costs what it would gain: at contrast 0.5 on every invention the synth rooms fell
-//! 2.3-3.4 dB; with repeating planes spared they moved -0.06 to +0.05 dB at 0.7 (bench/JOURNAL.md,
-//! 2026-11-30).
+//! baseline's blur on masked PSNR while far ahead of it on LPIPS.
 //!
-//! The mean is taken over the same surface only (`surfaces::surfaces_around`), so that a floor's
-//! invention next to a wall's keeps its own tone and the edge between them stays sharp.
+//! The copy is split by scale around m, the mean of the invented pixels of its own surface within
+//! `CONTRAST_RADIUS`: its grain (each pixel's difference from the mean of its 3 x 3 neighbours,
+//! `GRAIN_RADIUS`) and its structure (that 3 x 3 mean's difference from m: the clumps of the
+//! copied patches). An invented pixel becomes m + structure (g - m) + grain (v - g), g its 3 x 3
+//! mean (`Contrast`; 1 and 1 keep the copy as it is). LPIPS reads mostly the grain, the error
+//! pays for both. Masked PSNR / LPIPS held out on the real-photo bench (one training per scene;
+//! bench/JOURNAL.md, 2026-12-01), statue-one, statue-two-of-three, cup-one, cup-two-of-three:
+//! - 0.7 of both (before): 20.96 / 0.326, 21.11 / 0.245, 27.13 / 0.143, 27.73 / 0.119;
+//! - grain 1, no structure: 21.03 / 0.314, 21.52 / 0.247, 27.23 / 0.143, 27.71 / 0.118;
+//! - grain 0.7, no structure (the default): 21.08 / 0.355, 22.37 / 0.334, 27.25 / 0.142, 27.70 /
+//!   0.118; 0.5 of both gave statue-one 21.08 / 0.364, nearest-copy 21.07 / 0.528 and 22.37 /
+//!   0.453.
 //!
-//! A CPU pass like edge_tone.rs, after the GPU inpainting: one box sum of the image per surface
+//! A texture that repeats (a checkerboard, bricks) is continued in phase with the truth, and
+//! lowering its contrast costs what it would gain: at contrast 0.5 on every invention the synth
+//! rooms fell 2.3-3.4 dB; with repeating planes spared they moved -0.06 to +0.05 dB at 0.7
+//! (bench/JOURNAL.md, 2026-11-30).
+//!
+//! The means are taken over the same surface only (`surfaces::surfaces_around`), so that a
+//! floor's invention next to a wall's keeps its own tone and the edge between them stays sharp.
+//!
+//! A CPU pass like edge_tone.rs, after the GPU inpainting: two box sums of the image per surface
 //! that holds inventions.
 
 use crate::image_ops::{box_count, box_sum};
@@ -26,6 +38,26 @@ use crate::image_ops::{box_count, box_sum};
 /// that the mean is of several copied 7 x 7 patches, not of the one a pixel lies in (on statue-one
 /// radii 12 and 24 scored alike, 6 a little lower on both masked PSNR and LPIPS).
 pub const CONTRAST_RADIUS: usize = 12;
+
+/// Half the window of the grain's mean, in pixels: the grain is what a pixel adds to its 3 x 3
+/// neighbourhood, the finest scale, which LPIPS reads most (with a 7 x 7 mean, a grain of 0.7 and
+/// no structure statue-one scored 20.96 / 0.305 against 21.08 / 0.355 at 3 x 3; bench/JOURNAL.md,
+/// 2026-12-01).
+pub const GRAIN_RADIUS: usize = 1;
+
+/// How much of a random invention is kept, scale by scale (`lower_contrast`): the grain (what each
+/// pixel adds to its 3 x 3 mean) and the structure (what that mean adds to the surface's local
+/// mean). Both 1: the copy as it is.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Contrast {
+    pub grain: f32,
+    pub structure: f32,
+}
+
+impl Contrast {
+    /// The copy as it is.
+    pub const UNCHANGED: Contrast = Contrast { grain: 1.0, structure: 1.0 };
+}
 
 /// The `fill` pixels whose invention is a random copy: all but those on a background plane
 /// (`labels`, 1 + the plane's index) whose known texture repeats (`repeats`, by label: the
@@ -37,7 +69,7 @@ pub fn random_copies(fill: &[bool], labels: &[u8], repeats: &[bool; 256]) -> Vec
     fill.iter().zip(labels).map(|(&f, &l)| f && !repeats[l as usize]).collect()
 }
 
-/// `--invention-contrast`'s parser: a number from 0 to 1.
+/// `--invention-contrast` and `--invention-structure`'s parser: a number from 0 to 1.
 pub fn parse_contrast(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
@@ -45,13 +77,13 @@ pub fn parse_contrast(s: &str) -> Result<f32, String> {
     }
 }
 
-/// Moves each `invented` pixel of planar RGB `rgb` (w x h) to m + `contrast` (v - m), m the
-/// per-channel mean of the invented pixels on its surface (`surfaces`; 0 = none, one group of
-/// its own) in the (2 CONTRAST_RADIUS + 1)^2 window around it. Other pixels are untouched.
-pub fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: usize, h: usize, contrast: f32) {
-    let radius = CONTRAST_RADIUS;
+/// Moves each `invented` pixel v of planar RGB `rgb` (w x h) to m + structure (g - m) + grain (v -
+/// g) (`contrast`), per channel: m the mean of the invented pixels on its surface (`surfaces`; 0 =
+/// none, one group of its own) in the (2 CONTRAST_RADIUS + 1)^2 window around it, g that mean in
+/// the (2 GRAIN_RADIUS + 1)^2 window. Other pixels are untouched.
+pub fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: usize, h: usize, contrast: Contrast) {
     let n = w * h;
-    if contrast >= 1.0 {
+    if contrast == Contrast::UNCHANGED {
         return;
     }
     let mut labels: Vec<u8> = (0..n).filter(|&p| invented[p]).map(|p| surfaces[p]).collect();
@@ -60,15 +92,15 @@ pub fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: us
     for s in labels {
         let on_s: Vec<bool> = (0..n).map(|p| invented[p] && surfaces[p] == s).collect();
         let masked: Vec<f32> = (0..3 * n).map(|i| if on_s[i % n] { rgb[i] } else { 0.0 }).collect();
-        let sums = box_sum(&masked, w, h, 3, radius);
-        let counts = box_count(&on_s, w, h, radius);
+        let means = |radius: usize| (box_sum(&masked, w, h, 3, radius), box_count(&on_s, w, h, radius));
+        let (local, grain) = (means(CONTRAST_RADIUS), means(GRAIN_RADIUS));
         for p in (0..n).filter(|&p| on_s[p]) {
-            // the pixel itself is in its window: the count is at least 1
-            let count = counts[p] as f32;
+            // the pixel itself is in both windows: the counts are at least 1
             for c in 0..3 {
-                let mean = sums[c * n + p] / count;
+                let m = local.0[c * n + p] / local.1[p] as f32;
+                let g = grain.0[c * n + p] / grain.1[p] as f32;
                 let v = &mut rgb[c * n + p];
-                *v = mean + contrast * (*v - mean);
+                *v = m + contrast.structure * (g - m) + contrast.grain * (*v - g);
             }
         }
     }
@@ -118,12 +150,14 @@ mod tests {
         }
     }
 
-    /// Against a brute-force window mean: each invented pixel is the mean of its surface's
-    /// invented pixels in its window plus `contrast` times its deviation from it; everything
-    /// else, and a second surface's part beside it, keeps or takes only its own values.
+    /// Against brute-force window means: each invented pixel is the mean of its surface's invented
+    /// pixels in the wide window, plus `structure` times what their mean in its 3 x 3 window adds
+    /// to it, plus `grain` times what the pixel adds to that; everything else, and a second
+    /// surface's part beside it, keeps or takes only its own values.
     #[test]
-    fn each_invented_pixel_moves_toward_its_surfaces_window_mean() {
-        let (w, h, r, contrast) = (40, 34, CONTRAST_RADIUS, 0.4);
+    fn each_invented_pixel_keeps_its_grain_and_structure_by_their_contrasts() {
+        let (w, h) = (40, 34);
+        let contrast = Contrast { grain: 0.6, structure: 0.3 };
         let n = w * h;
         let invented: Vec<bool> = (0..n).map(|p| (3..37).contains(&(p % w)) && (3..31).contains(&(p / w))).collect();
         // two surfaces meet inside the invented part
@@ -131,49 +165,67 @@ mod tests {
         let before: Vec<f32> = (0..3 * n).map(|i| noise(i % n, i / n)).collect();
         let mut after = before.clone();
         lower_contrast(&mut after, &invented, &surfaces, w, h, contrast);
-        for p in 0..n {
+        let mean = |p: usize, c: usize, r: usize| {
             let (x, y) = ((p % w) as i64, (p / w) as i64);
+            let window: Vec<f32> = (0..n)
+                .filter(|&q| ((q % w) as i64 - x).abs() <= r as i64 && ((q / w) as i64 - y).abs() <= r as i64)
+                .filter(|&q| invented[q] && surfaces[q] == surfaces[p])
+                .map(|q| before[c * n + q])
+                .collect();
+            window.iter().sum::<f32>() / window.len() as f32
+        };
+        for p in 0..n {
             for c in 0..3 {
+                let v = before[c * n + p];
                 let want = if !invented[p] {
-                    before[c * n + p]
+                    v
                 } else {
-                    let window: Vec<f32> = (0..n)
-                        .filter(|&q| {
-                            let (qx, qy) = ((q % w) as i64, (q / w) as i64);
-                            (qx - x).abs() <= r as i64 && (qy - y).abs() <= r as i64
-                        })
-                        .filter(|&q| invented[q] && surfaces[q] == surfaces[p])
-                        .map(|q| before[c * n + q])
-                        .collect();
-                    let mean = window.iter().sum::<f32>() / window.len() as f32;
-                    mean + contrast * (before[c * n + p] - mean)
+                    let (m, g) = (mean(p, c, CONTRAST_RADIUS), mean(p, c, GRAIN_RADIUS));
+                    m + contrast.structure * (g - m) + contrast.grain * (v - g)
                 };
                 let got = after[c * n + p];
-                assert!((got - want).abs() < 1e-5, "pixel ({x}, {y}) channel {c}: {got} against {want}");
+                assert!((got - want).abs() < 1e-5, "pixel ({}, {}) channel {c}: {got} against {want}", p % w, p / w);
             }
         }
     }
 
-    /// On a texture around a constant (the truth a copy does not know), the error of the fill
-    /// falls with the contrast: its mean square against the constant is the texture's, about
-    /// contrast^2 of it after (the local means' own spread adds a little), and a constant part stays
-    /// exactly as it is whatever the contrast.
+    /// On white noise around a constant (the truth a copy does not know), the error of the fill
+    /// falls with the contrasts by the closed form of independent pixels: a mean of k pixels
+    /// varies by 1/k of the noise's variance, so with the structure dropped (g - m) the error is
+    /// grain^2 (1 - 1/9) of the noise's, plus 1/625 for m and the wide mean's covariances (under
+    /// 0.2 % here, away from the borders); with the grain dropped the 3 x 3 mean's 1/9 stays.
+    /// A constant part stays exactly as it is whatever the contrasts.
     #[test]
-    fn an_uncorrelated_texture_comes_closer_to_the_mean_and_a_constant_stays() {
+    fn an_uncorrelated_texture_comes_closer_to_the_mean_by_scale_and_a_constant_stays() {
         let (w, h) = (64, 64);
         let n = w * h;
         let invented = vec![true; n];
         let surfaces = vec![1u8; n];
         let truth = 0.5;
-        let textured: Vec<f32> = (0..3 * n).map(|i| truth + 0.3 * (noise(i % n, i / n) - 0.5)).collect();
-        let mse = |img: &[f32]| img.iter().map(|v| (v - truth).powi(2)).sum::<f32>() / img.len() as f32;
-        let mut damped = textured.clone();
-        lower_contrast(&mut damped, &invented, &surfaces, w, h, 0.5);
-        let ratio = mse(&damped) / mse(&textured);
-        assert!((0.25..0.27).contains(&ratio), "mean square error ratio {ratio}, 0.25 expected");
+        let mut rng = crate::rng::Rng::new(7);
+        let textured: Vec<f32> = (0..3 * n).map(|_| truth + 0.1 * rng.normal() as f32).collect();
+        // away from the borders, where every window is whole
+        let inner = |i: usize| (12..w - 12).contains(&(i % n % w)) && (12..h - 12).contains(&(i % n / w));
+        let mse = |img: &[f32]| {
+            let e: Vec<f32> = (0..3 * n).filter(|&i| inner(i)).map(|i| (img[i] - truth).powi(2)).collect();
+            e.iter().sum::<f32>() / e.len() as f32
+        };
+        for (contrast, want) in [
+            (Contrast { grain: 0.5, structure: 0.0 }, 0.25 * 8.0 / 9.0),
+            (Contrast { grain: 0.0, structure: 1.0 }, 1.0 / 9.0),
+            (Contrast { grain: 0.5, structure: 0.5 }, 0.25),
+        ] {
+            let mut damped = textured.clone();
+            lower_contrast(&mut damped, &invented, &surfaces, w, h, contrast);
+            let ratio = mse(&damped) / mse(&textured);
+            assert!(
+                (ratio - want).abs() < 0.03 * want,
+                "{contrast:?}: mean square error ratio {ratio}, {want} expected"
+            );
+        }
 
         let mut constant = vec![0.3; 3 * n];
-        lower_contrast(&mut constant, &invented, &surfaces, w, h, 0.0);
+        lower_contrast(&mut constant, &invented, &surfaces, w, h, Contrast { grain: 0.0, structure: 0.0 });
         assert!(constant.iter().all(|&v| (v - 0.3).abs() < 1e-6));
     }
 }

@@ -124,13 +124,17 @@ pub struct CompletionConfig {
     /// +0.060; the synth rooms lost 0.7-8.9 dB). Needs the color transfer.
     #[arg(long)]
     pub share_inventions: bool,
-    /// Contrast kept of the exemplar's texture where no photo saw the background and the surface's
-    /// texture does not repeat (0-1): each such invented pixel becomes its surface's local mean
-    /// plus this times its difference from it. 1 keeps the copied texture as it is (sharpest, but
-    /// grass copied from elsewhere falls where the real grass does not); lower trades sharpness
-    /// for error against the unseen truth (invention_contrast.rs).
+    /// Contrast kept of the grain of the exemplar's texture (what each pixel adds to its 3 x 3
+    /// mean) where no photo saw the background and the surface's texture does not repeat (0-1).
+    /// 1 keeps it sharp; lower trades sharpness for error against the unseen truth, since grass
+    /// copied from elsewhere falls where the real grass does not (invention_contrast.rs).
     #[arg(long, default_value_t = 0.7, value_parser = invention_contrast::parse_contrast)]
     pub invention_contrast: f32,
+    /// Contrast kept of the structure of those inventions (0-1): what their 3 x 3 means add to
+    /// their surface's mean within 12 px, the clumps of the copied patches. 0 leaves the local
+    /// mean and the grain; 1 with `--invention-contrast 1` keeps the copy as it is.
+    #[arg(long, default_value_t = 0.0, value_parser = invention_contrast::parse_contrast)]
+    pub invention_structure: f32,
     /// Feathering radius (pixels) of the soft mask that blends aligned prior and rendered depth.
     #[arg(long, default_value_t = 4.0)]
     pub soft_radius: f32,
@@ -158,8 +162,8 @@ pub struct Completer {
     /// Views take the colors earlier views invented for the same surface point (`transfer_colors`;
     /// `false`, the default: each view invents its own).
     pub share_inventions: bool,
-    /// Contrast kept of the exemplar's inventions (`invention_contrast`).
-    pub invention_contrast: f32,
+    /// Contrast kept of the exemplar's random inventions, by scale (`invention_contrast`).
+    pub invention_contrast: invention_contrast::Contrast,
     /// The transfer's texture fills (`texture_view`) of independent views (no shared
     /// inventions, a built-in inpainter) run on all cores. On a GPU its host work then overlaps
     /// (on a lent H200 this half of the stage, one view after another, was half of a removal's
@@ -265,7 +269,10 @@ impl Completer {
             depth_guidance: cfg.depth_guidance,
             photo_depth: cfg.photo_depth,
             share_inventions: cfg.share_inventions,
-            invention_contrast: cfg.invention_contrast,
+            invention_contrast: invention_contrast::Contrast {
+                grain: cfg.invention_contrast,
+                structure: cfg.invention_structure,
+            },
             views_in_parallel: !gpu.info().is_cpu(),
             seed,
         })
@@ -443,7 +450,7 @@ impl Completer {
             let k = Intrinsics::from(camera);
             let disparity = depth::disparity(&c.depth);
             let guide = (&c.surfaces[..], &disparity[..], &c.planes[..], &k);
-            let (rgb, repeats) = self.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
+            let (rgb, repeats) = self.inpainter.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
             c.rgb = rgb;
             // the exemplar's copied texture: it keeps the brightness of where it was copied from
             // (edge_tone.rs), and a random texture's copy is not the truth's (invention_contrast.rs)
@@ -574,34 +581,6 @@ impl Completer {
             texture_pending,
             farther_covered,
         })
-    }
-
-    /// Inpaints `fill` of edited view `index`'s `image` (e.g. after color transfer made more
-    /// pixels known), keeping each surface's colors on that surface where the built-in inpainter
-    /// is used (`guide`: the surface labels, the completed disparity, the planes and the view's
-    /// intrinsics); `avoid` pixels stay but lend the exemplar fill no texture. With the exemplar,
-    /// also which surfaces' texture repeats (`exemplar::RectifiedFill::repeats`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn inpaint_again(
-        &self,
-        index: usize,
-        image: &[f32],
-        fill: &[bool],
-        avoid: &[bool],
-        (labels, disparity, planes, k): (&[u8], &[f32], &[Plane], &Intrinsics),
-        w: usize,
-        h: usize,
-    ) -> Result<(Vec<f32>, Option<[bool; 256]>)> {
-        match &self.inpainter {
-            Inpainter::Harmonic => Ok((surfaces::fill_by_surface(image, fill, labels, w, h, 3), None)),
-            Inpainter::Exemplar(e) => {
-                let filled = e.fill_rectified(image, fill, avoid, labels, Some(disparity), planes, k, w, h)?;
-                Ok((filled.rgb, Some(filled.repeats)))
-            }
-            Inpainter::Onnx(_) | Inpainter::Provided { .. } => {
-                Ok((self.inpainter.inpaint_view(index, image, fill, w, h)?, None))
-            }
-        }
     }
 }
 
