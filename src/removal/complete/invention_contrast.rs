@@ -40,15 +40,15 @@ use crate::image_ops::{box_count, box_sum};
 pub const CONTRAST_RADIUS: usize = 12;
 
 /// Half the window of the grain's mean, in pixels: the grain is what a pixel adds to its 3 x 3
-/// neighbourhood, the finest scale, which LPIPS reads most (with a 7 x 7 mean, a grain of 0.7 and
-/// no structure statue-one scored 20.96 / 0.305 against 21.08 / 0.355 at 3 x 3; bench/JOURNAL.md,
-/// 2026-12-01).
+/// neighbourhood, the finest scale. A 7 x 7 mean keeps more of the copy as grain: with a grain of
+/// 0.7 and no structure statue-one scored 20.96 / 0.305 with it against 21.08 / 0.355 at 3 x 3,
+/// the other end of the same trade (bench/JOURNAL.md, 2026-12-01).
 pub const GRAIN_RADIUS: usize = 1;
 
 /// How much of a random invention is kept, scale by scale (`lower_contrast`): the grain (what each
 /// pixel adds to its 3 x 3 mean) and the structure (what that mean adds to the surface's local
 /// mean). Both 1: the copy as it is.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Contrast {
     pub grain: f32,
     pub structure: f32,
