@@ -383,6 +383,41 @@ fn loss_masks_weigh_each_pixel() {
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }
 
+/// A loss term linear in the rendered alpha (`Trainer::set_alpha_gradients`, the refinement's
+/// coverage term), with every color weight zero: a negative gradient raises the opacity of every
+/// Gaussian the view shows and lowers none, a positive one the reverse; the colors get no
+/// gradient from the alpha and stay bit for bit; planes of the wrong size are refused.
+#[test]
+fn alpha_gradients_move_only_what_the_alpha_depends_on() {
+    use cogeo::train::trainer::{TrainConfig, Trainer};
+    let (gpu, scene, data) = one_view_scene(11, 60, 0, [1.0, 0.0, 0.0, 0.0]);
+    let step = |gradient: f32| {
+        let cfg = TrainConfig { iters: 10, densify: false, ..Default::default() };
+        let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
+        t.set_loss_masks(&[vec![0.0; 1200]]).unwrap();
+        t.set_alpha_gradients(&[vec![gradient; 1200]]).unwrap();
+        for _ in 0..3 {
+            t.iterate(&data, false).unwrap();
+        }
+        t.download_scene().unwrap()
+    };
+    for sign in [-1.0f32, 1.0] {
+        let after = step(sign * 1e-3);
+        let changes: Vec<f32> = after.opacity_logits.iter().zip(&scene.opacity_logits).map(|(a, b)| a - b).collect();
+        let raised = changes.iter().filter(|&&d| d > 1e-4).count();
+        let lowered = changes.iter().filter(|&&d| d < -1e-4).count();
+        println!("alpha gradient {sign:+}: {raised} opacities raised, {lowered} lowered of {}", changes.len());
+        let (toward, against) = if sign < 0.0 { (raised, lowered) } else { (lowered, raised) };
+        assert!(toward >= changes.len() / 2, "only {toward} of {} opacities followed the gradient", changes.len());
+        assert_eq!(against, 0, "{against} opacities moved against the gradient");
+        assert_eq!(after.sh, scene.sh, "the alpha's gradient moved colors");
+    }
+    let mut t = Trainer::new(&gpu, &data, &scene, TrainConfig::default()).unwrap();
+    let err = t.set_alpha_gradients(&[vec![0.0; 1199]]).unwrap_err().to_string();
+    assert!(err.contains("1199 values for an image of 1200 pixels"), "{err}");
+    assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
+}
+
 /// Per-Gaussian freezing (`Trainer::set_movable`, the removal's refinement): the first step
 /// moves each movable Gaussian as it does without the flags (every Gaussian starts from the same
 /// state, so it gets the same gradient), and the others not at all, bit for bit, over later steps

@@ -105,6 +105,9 @@ pub struct Trainer {
     /// Per-pixel loss weights of every training view (`set_loss_masks`), one plane per view,
     /// and each view's weight sum.
     loss_masks: Option<(Buffer, Vec<f64>)>,
+    /// Per training view, the loss's gradient with respect to the rendered alpha of each pixel
+    /// (`set_alpha_gradients`), a constant: a loss linear in the alpha.
+    alpha_gradients: Option<Vec<Buffer>>,
     /// Per-view exposure maps (`TrainConfig::exposure`, or fixed ones from `set_exposures`).
     exposure: Option<ViewExposures>,
     pub step: u32,
@@ -172,6 +175,7 @@ impl Trainer {
             target_offsets,
             view_names: dataset.train.iter().map(|v| v.camera.name.clone()).collect(),
             loss_masks: None,
+            alpha_gradients: None,
             exposure,
             step: 0,
             rng: Rng::new(cfg.seed),
@@ -200,27 +204,37 @@ impl Trainer {
     /// Weights each training view's loss per pixel (width x height per view, in the dataset's
     /// order; 0 = the pixel does not count): the loss becomes the weighted mean.
     pub fn set_loss_masks(&mut self, masks: &[Vec<f32>]) -> Result<()> {
-        if masks.len() != self.target_offsets.len() {
-            anyhow::bail!("{} loss masks for {} training views", masks.len(), self.target_offsets.len());
-        }
+        self.check_planes(masks, "loss masks", "weights")?;
         // one plane per view, one after another: view i's starts at target_offsets[i] / 3 (the
         // targets are planar RGB)
-        let total = self.targets.size() as usize / 4;
-        let mut all = Vec::with_capacity(total / 3);
-        let mut sums = Vec::with_capacity(masks.len());
-        for (i, (m, &offset)) in masks.iter().zip(&self.target_offsets).enumerate() {
-            let end = self.target_offsets.get(i + 1).map_or(total, |&o| o as usize);
-            if 3 * m.len() != end - offset as usize {
-                anyhow::bail!(
-                    "loss mask {i}: {} weights for an image of {} pixels",
-                    m.len(),
-                    (end - offset as usize) / 3
-                );
-            }
-            all.extend_from_slice(m);
-            sums.push(m.iter().map(|&w| w as f64).sum());
-        }
+        let all: Vec<f32> = masks.concat();
+        let sums = masks.iter().map(|m| m.iter().map(|&w| w as f64).sum()).collect();
         self.loss_masks = Some((Buffer::from_slice(&self.gpu, "loss masks", &all)?, sums));
+        Ok(())
+    }
+
+    /// Adds to the loss a term linear in each training view's rendered alpha: `gradients` holds,
+    /// per view and pixel, its derivative by that pixel's alpha (negative: coverage is rewarded).
+    /// Without it the backward runs its color-only variant.
+    pub fn set_alpha_gradients(&mut self, gradients: &[Vec<f32>]) -> Result<()> {
+        self.check_planes(gradients, "alpha gradients", "values")?;
+        let buffers = gradients.iter().map(|g| Buffer::from_slice(&self.gpu, "alpha gradients", g));
+        self.alpha_gradients = Some(buffers.collect::<Result<_>>()?);
+        Ok(())
+    }
+
+    /// One plane of `what` per training view, each of its view's pixel count.
+    fn check_planes(&self, planes: &[Vec<f32>], what: &str, values: &str) -> Result<()> {
+        if planes.len() != self.target_offsets.len() {
+            anyhow::bail!("{} {what} for {} training views", planes.len(), self.target_offsets.len());
+        }
+        let total = self.targets.size() as usize / 4;
+        for (i, (p, &offset)) in planes.iter().zip(&self.target_offsets).enumerate() {
+            let pixels = (self.target_offsets.get(i + 1).map_or(total, |&o| o as usize) - offset as usize) / 3;
+            if p.len() != pixels {
+                anyhow::bail!("{what} {i}: {} {values} for an image of {pixels} pixels", p.len());
+            }
+        }
         Ok(())
     }
 
@@ -327,7 +341,8 @@ impl Trainer {
             }
             None => self.loss.dl_drgb(),
         };
-        let upstream = PixelGradients { rgb: dl_drgb, alpha: None, depth: None, expected_depth: None, features: None };
+        let alpha = self.alpha_gradients.as_ref().map(|g| &g[vi]);
+        let upstream = PixelGradients { rgb: dl_drgb, alpha, depth: None, expected_depth: None, features: None };
         let render_params = self.raster.params_buffer();
         if fused {
             self.backward.record_to_projected(&mut rec, render_params, &frame.params, &upstream, &self.grads)?;
