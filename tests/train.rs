@@ -384,9 +384,10 @@ fn loss_masks_weigh_each_pixel() {
 }
 
 /// A loss term linear in the rendered alpha (`Trainer::set_alpha_gradients`, the refinement's
-/// coverage term), with every color weight zero: a negative gradient raises the opacity of every
-/// Gaussian the view shows and lowers none, a positive one the reverse; the colors get no
-/// gradient from the alpha and stay bit for bit; planes of the wrong size are refused.
+/// coverage term), with every color weight zero: a negative gradient raises the opacity of the
+/// Gaussians the view shows (at least half of these) and lowers none, a positive one the
+/// reverse; the colors get no gradient from the alpha and stay bit for bit; planes of the wrong
+/// size are refused.
 #[test]
 fn alpha_gradients_move_only_what_the_alpha_depends_on() {
     use cogeo::train::trainer::{TrainConfig, Trainer};

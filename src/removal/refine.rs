@@ -84,9 +84,10 @@ pub const VIEW_DEPENDENCE: ViewDependence = ViewDependence::All;
 /// error: the patch lay where the views' completions put the surface farthest (a point floating in
 /// front of any other view's completion is dropped) and held gaps there, the black background
 /// showing through. At 0.1 masked PSNR / LPIPS went 21.10 / 0.334 -> 21.73 / 0.328 (at 1, on
-/// every fill pixel, 21.84 / 0.382, and those pixels' share of the error 10 %), but statue-one 21.38 / 0.419 -> 21.43 / 0.440
-/// (never-seen LPIPS 0.411 -> 0.432, over 0.7 of the harmonic fill's 0.607 in the bench table)
-/// and cup-one 27.21 / 0.156 -> 27.16 / 0.158 (bench/JOURNAL.md, 2026-12-02).
+/// every fill pixel, 21.84 / 0.382, and those pixels' share of the error 10 %), but statue-one
+/// went 21.38 / 0.419 -> 21.43 / 0.440 (never-seen LPIPS 0.411 -> 0.432, over 0.7 of the
+/// harmonic fill's 0.607 in the bench table) and cup-one 27.21 / 0.156 -> 27.16 / 0.158
+/// (bench/JOURNAL.md, 2026-12-02).
 pub const COVERAGE_WEIGHT: f32 = 0.0;
 
 /// Refinement settings: the one home of their defaults, also `cogeo remove`'s flags.
