@@ -449,8 +449,6 @@ fn refine_views(
     let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
     let mut masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
     let mut targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
-    let mut fills: Vec<Vec<f32>> =
-        views.iter().map(|v| v.masked.fill.iter().map(|&f| f as u8 as f32).collect()).collect();
     let movable = (!opts.refine.all_gaussians)
         .then(|| refine::movable_gaussians(scene, cameras, &holes, patch_gaussians, opts.refine.view_dependence));
     let mut cameras = cameras.to_vec();
@@ -464,13 +462,12 @@ fn refine_views(
             let (w, h) = (cam.width as usize, cam.height as usize);
             targets[i] = crop(&targets[i], w, h, 3, win);
             masks[i] = crop(&masks[i], w, h, 1, win);
-            fills[i] = crop(&fills[i], w, h, 1, win);
             *cam = refine::window_camera(cam, win);
             windows[i] = Some(win);
         }
     }
     let coverage = (opts.refine.coverage_weight > 0.0)
-        .then(|| refine::coverage_gradients(&fills, &masks, opts.refine.hole_weight, opts.refine.coverage_weight));
+        .then(|| refine::coverage_gradients(&masks, opts.refine.hole_weight, opts.refine.coverage_weight));
     let total = opts.refine.iterations(cameras.len()) as usize;
     let (refined, report) = refine::refine(
         gpu,

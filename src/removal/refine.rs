@@ -252,18 +252,19 @@ pub fn movable_gaussians(
 }
 
 /// Per view, the coverage term's gradient by the rendered alpha (`RefineConfig::coverage_weight`):
-/// at the `fills` pixels (1, else 0) whose color weight in `masks` is zero, -`weight` times the
-/// hole weight over the sum of the view's `masks` (the color loss's normalization), so that such
-/// a pixel left uncovered costs about what a color error of `weight` costs in a hole pixel that
-/// counts in full; 0 elsewhere.
-pub fn coverage_gradients(fills: &[Vec<f32>], masks: &[Vec<f32>], hole_weight: f32, weight: f32) -> Vec<Vec<f32>> {
-    fills
+/// at the pixels whose color weight in `masks` (`loss_weights`) is zero, -`weight` times the hole
+/// weight over the sum of the view's `masks` (the color loss's normalization), so that such a
+/// pixel left uncovered costs about what a color error of `weight` costs in a hole pixel that
+/// counts in full; 0 elsewhere. A weight is zero only where the consensus left an invention to
+/// its owners (`consensus::loss_masks`: invented pixels, all in the fill), or in the whole hole
+/// with a hole weight of 0, which makes the gradient 0 too.
+pub fn coverage_gradients(masks: &[Vec<f32>], hole_weight: f32, weight: f32) -> Vec<Vec<f32>> {
+    masks
         .iter()
-        .zip(masks)
-        .map(|(fill, mask)| {
+        .map(|mask| {
             let sum: f64 = mask.iter().map(|&w| w as f64).sum();
             let g = -(weight as f64 * hole_weight as f64 / sum.max(1.0)) as f32;
-            fill.iter().zip(mask).map(|(&f, &m)| if f > 0.5 && m == 0.0 { g } else { 0.0 }).collect()
+            mask.iter().map(|&m| if m == 0.0 { g } else { 0.0 }).collect()
         })
         .collect()
 }
@@ -465,16 +466,21 @@ mod tests {
         assert_eq!(plain, vec![vec![2.5, 2.5, 1.0, 1.0], vec![1.0, 2.5, 1.0, 2.5]]);
     }
 
-    /// The coverage term's gradient: only at fill pixels the color loss does not weigh, the
-    /// weight times the hole weight over the view's weight sum, negative (coverage rewarded).
+    /// The coverage term's gradient: only at the pixels the color loss does not weigh (an
+    /// invention left out of a hole pixel, weight 0 from `loss_weights`), the weight times the
+    /// hole weight over the view's weight sum, negative (coverage rewarded).
     #[test]
-    fn coverage_pulls_only_fill_pixels_the_color_loss_leaves_out() {
-        let fills = vec![vec![1.0, 1.0, 0.0, 0.0]];
-        let masks = vec![vec![0.0, 4.0, 0.0, 1.0]];
-        let g = coverage_gradients(&fills, &masks, 4.0, 0.5);
-        assert_eq!(g, vec![vec![-0.5 * 4.0 / 5.0, 0.0, 0.0, 0.0]]);
-        let none = coverage_gradients(&fills, &[vec![0.0; 4]], 4.0, 0.5);
-        assert_eq!(none, vec![vec![-2.0, -2.0, 0.0, 0.0]], "a weight sum under 1 counts as 1");
+    fn coverage_pulls_only_pixels_the_color_loss_leaves_out() {
+        let holes = [[true, true, false, false]];
+        let holes: Vec<&[bool]> = holes.iter().map(|h| &h[..]).collect();
+        let masks = loss_weights(&holes, Some(vec![vec![0.0, 1.0, 1.0, 1.0]]), 4.0);
+        assert_eq!(masks, vec![vec![0.0, 4.0, 1.0, 1.0]]);
+        let g = coverage_gradients(&masks, 4.0, 0.5);
+        assert_eq!(g, vec![vec![-0.5 * 4.0 / 6.0, 0.0, 0.0, 0.0]]);
+        let none = coverage_gradients(&[vec![0.0, 0.0, 1.0, 1.0]], 4.0, 0.5);
+        assert_eq!(none, vec![vec![-1.0, -1.0, 0.0, 0.0]], "the sum 2: 0.5 x 4 / 2");
+        let tiny = coverage_gradients(&[vec![0.0, 0.5]], 4.0, 0.5);
+        assert_eq!(tiny, vec![vec![-2.0, 0.0]], "a weight sum under 1 counts as 1");
     }
 
     /// The default refines 150 iterations up to 25 views and 6 per view beyond (the cup
