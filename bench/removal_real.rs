@@ -366,9 +366,9 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
            | scene | beats the three (PSNR / LPIPS) | seen-elsewhere gap dB | never-seen LPIPS ratio | perfect-inpainting gap dB | disagreeing LPIPS ratio | perfect inpaintings under the capture dB |\n\
            |---|---|---:|---:|---:|---:|---:|\n";
     for spec in specs {
-        let get = |variant: &str| {
-            rows.iter().find(|r| r["scene"] == spec.name && r["variant"] == variant).map(|r| &r["metrics"])
-        };
+        let row = |variant: &str| rows.iter().find(|r| r["scene"] == spec.name && r["variant"] == variant);
+        let get = |variant: &str| row(variant).map(|r| &r["metrics"]);
+        let show = |v: Option<f64>, d: usize| num(&serde_json::json!(v), d);
         let f = |m: Option<&serde_json::Value>, path: &[&str]| {
             path.iter().try_fold(m?, |v, k| v.get(*k)).and_then(|v| v.as_f64())
         };
@@ -405,20 +405,21 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
         // the one-source runs' own LPIPS over their median: the ratio a run lands at by its seed
         // alone (statue-two-of-three's three seeds spread by 10 %)
         let seeds = lpips(crate::ONE_SOURCE).and_then(|median| {
-            let row = rows.iter().find(|r| r["scene"] == spec.name && r["variant"] == crate::ONE_SOURCE)?;
-            let runs: Vec<f64> =
-                row["single_source_runs"].as_array()?.iter().filter_map(|r| r["mask_lpips"].as_f64()).collect();
+            let runs: Vec<f64> = row(crate::ONE_SOURCE)?["single_source_runs"]
+                .as_array()?
+                .iter()
+                .filter_map(|r| r["mask_lpips"].as_f64())
+                .collect();
             let lo = runs.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = runs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             (runs.len() > 1).then_some((lo / median, hi / median))
         });
         let disagreeing = match (disagreeing, seeds) {
             (Some(d), Some((lo, hi))) => format!("{d:.3} (seeds {lo:.3}-{hi:.3})"),
-            (d, _) => num(&serde_json::json!(d), 3),
+            (d, _) => show(d, 3),
         };
         let under =
             f(get(crate::CAPTURE_CEILING), &["mask", "psnr"]).zip(f(perfect, &["mask", "psnr"])).map(|(a, b)| a - b);
-        let show = |v: Option<f64>, d: usize| num(&serde_json::json!(v), d);
         md += &format!(
             "| {} | {} / {} | {} | {} | {} | {} | {} |\n",
             spec.name,
