@@ -5,6 +5,8 @@
 //!    labels go.
 //! 2. Hole masks (select.rs): per edited view, the pixels the removed Gaussians carried, dilated;
 //!    the part the remaining Gaussians do not cover is to be synthesized.
+//!    Every depth read from here on is the expected or the median rendered depth, whichever the
+//!    captured photos agree with (rendered_depth.rs: stages 2 to 3b run under both).
 //! 3. Completion per view (complete/): inpainting, depth anchoring, depth refinement, the
 //!    depth's planes guiding the built-in inpainter. Then the hole's depth is corrected to where
 //!    the captured photos agree: the depth of the Gaussians left behind the objects where the
@@ -32,6 +34,7 @@ pub mod prune;
 pub mod held_out;
 pub mod hull;
 pub mod refine;
+pub mod rendered_depth;
 pub mod report;
 pub mod view;
 
@@ -48,6 +51,7 @@ use consensus::ConsensusView;
 use fuse::{FuseConfig, FuseView, Patched};
 use prune::PruneSettings;
 use refine::{RefineConfig, RefineReport};
+use rendered_depth::RenderedDepth;
 use report::{BackgroundPsnr, CompletionSummary, GaussianCounts, RemovalReport, StageClock};
 use select::{HoleConfig, Selection, ViewRenderer};
 use view::EditedView;
@@ -95,6 +99,11 @@ pub struct RemoveOptions {
     /// completed surface the pixel gets no new Gaussian.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
+    /// The rendered depth the removal reads (rendered_depth.rs): auto (complete under both the
+    /// expected and the median depth, keep the one the captured photos agree with better),
+    /// expected or median.
+    #[arg(long, value_enum, default_value_t)]
+    pub rendered_depth: RenderedDepth,
     #[command(flatten)]
     pub stages: Stages,
     #[command(flatten)]
@@ -178,56 +187,28 @@ pub fn remove(
     check_inputs(scene, labels, cameras, photos, opts)?;
     let mut clock = StageClock::start();
     // 1. selection
-    let mut selection = select::select_gaussians(scene, labels, &opts.labels)?;
+    let selection = select::select_gaussians(scene, labels, &opts.labels)?;
     clock.lap("select");
-    // 2. hole masks, from renders before and after deletion
-    let holes = HoleConfig {
-        threshold: opts.hole_threshold,
-        dilate: opts.dilate,
-        keep_alpha: opts.keep_alpha,
-        background: opts.background,
-    };
-    let mut masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
-    clock.lap("masks");
-    // 1b. the background Gaussians the tagging left inside the objects go too (and the holes are
-    // drawn again without them)
-    let left_inside = hull::remove_leftovers_inside(
-        gpu,
-        scene,
-        labels,
-        &opts.labels,
-        cameras,
-        &holes,
-        &opts.hull,
-        &mut selection,
-        &mut masked,
-        &mut |d, t| progress("hull", d, t),
+    // 2. to 3b., under the rendered depth the captured photos agree with (both tried for
+    // `RenderedDepth::Auto`)
+    let photo_depth = opts.stages.complete && !photos.is_empty() && completer.photo_depth;
+    let inputs = StageInputs { gpu, scene, labels, cameras, photos, opts, completer };
+    let (staged, depth_choice) = rendered_depth::stage_in_chosen_depth(
+        if opts.stages.complete { opts.rendered_depth } else { RenderedDepth::Expected },
+        photo_depth,
+        &mut |median_depth, progress| stage_views(&inputs, selection.clone(), median_depth, &mut clock, progress),
+        progress,
     )?;
-    clock.lap("hull");
-    let mut views: Vec<EditedView> = masked
-        .into_iter()
-        .enumerate()
-        .map(|(i, m)| EditedView::new(&cameras[i], photos.get(i).map(|p| p.as_slice()), m))
-        .collect();
+    let Staged { mut views, selection, left_inside } = staged;
     let Selection { removed, count: removed_count, background, .. } = selection;
     let mut result = background;
     let (mut fusion, mut prune_used, mut pruned) = (None, None, 0);
     let (mut refine_report, mut refine_windows) = (None, Vec::new());
     if opts.stages.complete {
-        // 3. completion
-        complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
-        clock.lap("complete");
-        // 3b. the hole depth the captured photos agree on, then 3c. colors from the views that
-        // saw the completed surface
-        if !photos.is_empty() {
-            if completer.photo_depth {
-                correct_depths(&mut views, cameras, completer, progress);
-                clock.lap("photo_depth");
-            }
-            if opts.stages.transfer {
-                transfer_colors(&mut views, cameras, completer, progress)?;
-                clock.lap("transfer");
-            }
+        // 3c. colors from the views that saw the completed surface
+        if !photos.is_empty() && opts.stages.transfer {
+            transfer_colors(&mut views, cameras, completer, progress)?;
+            clock.lap("transfer");
         }
         // 4. fusion and pruning (or the nearest-copy baseline)
         let patch = fuse_patch(&mut views, scene, &removed, result, opts)?;
@@ -256,6 +237,7 @@ pub fn remove(
         // the fusion's settings as used (its opacity depends on the refinement)
         options: RemoveOptions { fuse: opts.fuse_config(), ..opts.clone() },
         completion: opts.stages.complete.then(|| CompletionSummary::of(completer, !photos.is_empty())),
+        rendered_depth: opts.stages.complete.then_some(depth_choice),
         gaussians: GaussianCounts {
             input: scene.len(),
             removed: removed_count,
@@ -302,6 +284,83 @@ fn check_inputs(
         }
     }
     Ok(())
+}
+
+/// What stages 2 to 3b read: `remove`'s arguments.
+struct StageInputs<'a> {
+    gpu: &'a Gpu,
+    scene: &'a GaussianScene,
+    labels: &'a [u8],
+    cameras: &'a [Camera],
+    photos: &'a [Vec<f32>],
+    opts: &'a RemoveOptions,
+    completer: &'a Completer,
+}
+
+/// The edited views after stage 3b, the selection the hull grew and the Gaussians it took.
+pub(crate) struct Staged<'a> {
+    views: Vec<EditedView<'a>>,
+    selection: Selection,
+    left_inside: usize,
+}
+
+/// Stages 2 to 3b with every render's depth the median one (`median_depth`) or the expected one:
+/// the hole masks, the Gaussians left inside the objects (which go with them, `selection` grows),
+/// then (unless removal only) completion and the photo-consistent hole depth.
+fn stage_views<'a>(
+    inputs: &StageInputs<'a>,
+    mut selection: Selection,
+    median_depth: bool,
+    clock: &mut StageClock,
+    progress: Progress,
+) -> Result<Staged<'a>> {
+    let StageInputs { gpu, scene, labels, cameras, photos, opts, completer } = *inputs;
+    // `Auto` runs these stages twice: the second run's progress says which depth it reads
+    let mut labelled = |stage: &str, done, total| match median_depth {
+        true => progress(&format!("{stage} (median depth)"), done, total),
+        false => progress(stage, done, total),
+    };
+    let progress: Progress = &mut labelled;
+    // 2. hole masks, from renders before and after deletion
+    let holes = HoleConfig {
+        threshold: opts.hole_threshold,
+        dilate: opts.dilate,
+        keep_alpha: opts.keep_alpha,
+        background: opts.background,
+        median_depth,
+    };
+    let mut masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
+    clock.lap("masks");
+    // 1b. the background Gaussians the tagging left inside the objects go too (and the holes are
+    // drawn again without them)
+    let left_inside = hull::remove_leftovers_inside(
+        gpu,
+        scene,
+        labels,
+        &opts.labels,
+        cameras,
+        &holes,
+        &opts.hull,
+        &mut selection,
+        &mut masked,
+        &mut |d, t| progress("hull", d, t),
+    )?;
+    clock.lap("hull");
+    let mut views: Vec<EditedView> = masked
+        .into_iter()
+        .enumerate()
+        .map(|(i, m)| EditedView::new(&cameras[i], photos.get(i).map(|p| p.as_slice()), m))
+        .collect();
+    if opts.stages.complete {
+        // 3. completion, 3b. the hole depth the captured photos agree on
+        complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
+        clock.lap("complete");
+        if !photos.is_empty() && completer.photo_depth {
+            correct_depths(&mut views, cameras, completer, progress);
+            clock.lap("photo_depth");
+        }
+    }
+    Ok(Staged { views, selection, left_inside })
 }
 
 /// Stage 3 over every view.
@@ -493,7 +552,7 @@ fn final_renders(
     background: [f32; 3],
     progress: Progress,
 ) -> Result<(Vec<Vec<f32>>, Vec<f64>)> {
-    let mut renderer = ViewRenderer::new(gpu, scene, None)?;
+    let mut renderer = ViewRenderer::new(gpu, scene, None, false)?;
     let (mut after, mut bg_psnr) = (Vec::new(), Vec::new());
     for (i, v) in views.iter().enumerate() {
         let rgb = renderer.render(v.camera, background)?.rgb;

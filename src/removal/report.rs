@@ -15,6 +15,8 @@ pub struct RemovalReport {
     pub options: RemoveOptions,
     /// The models completion used (None: removal only).
     pub completion: Option<CompletionSummary>,
+    /// The rendered depth the removal read and how the photos chose it (None: removal only).
+    pub rendered_depth: Option<super::rendered_depth::DepthChoice>,
     pub gaussians: GaussianCounts,
     /// Per edited view (empty without completion).
     pub views: Vec<ViewReport>,
@@ -91,8 +93,10 @@ impl StageClock {
     pub fn start() -> StageClock {
         StageClock { clock: Instant::now(), seconds: BTreeMap::new() }
     }
+    /// Adds the time since the last lap to `stage`'s (a stage that runs twice, as stage 3 under
+    /// both rendered depths, sums its runs).
     pub fn lap(&mut self, stage: &str) {
-        self.seconds.insert(stage.into(), self.clock.elapsed().as_secs_f64());
+        *self.seconds.entry(stage.into()).or_default() += self.clock.elapsed().as_secs_f64();
         self.clock = Instant::now();
     }
 }

@@ -26,6 +26,7 @@ pub fn select(labels: &[u8], chosen: &[u8]) -> Vec<bool> {
 }
 
 /// Stage 1: the Gaussians to remove and the scene without them.
+#[derive(Clone)]
 pub struct Selection {
     /// Per input Gaussian: true when it is removed.
     pub removed: Vec<bool>,
@@ -52,33 +53,40 @@ pub fn select_gaussians(scene: &GaussianScene, labels: &[u8], chosen: &[u8]) -> 
     Ok(Selection { removed, count, background, kept_objects })
 }
 
-/// Renders RGB, alpha, expected depth and (with `marked`) the marked Gaussians' weight.
+/// Renders RGB, alpha, depth (expected or median) and (with `marked`) the marked Gaussians'
+/// weight.
 pub struct ViewRenderer {
     renderer: SceneRenderer,
     features: bool,
+    median_depth: bool,
 }
 
-/// One render of a view (planar RGB, alpha, expected depth; the marked Gaussians' weight, zero
-/// where none were marked).
+/// One render of a view (planar RGB, alpha, depth; the marked Gaussians' weight, zero where none
+/// were marked).
 pub struct Rendered {
     pub rgb: Vec<f32>,
     pub alpha: Vec<f32>,
+    /// The expected depth, or the median depth where the renderer was made to read it.
     pub depth: Vec<f32>,
     pub weight: Vec<f32>,
 }
 
 impl ViewRenderer {
-    pub fn new(gpu: &Gpu, scene: &GaussianScene, marked: Option<&[bool]>) -> Result<ViewRenderer> {
+    /// A renderer whose `Rendered::depth` is the expected depth, or the median depth with
+    /// `median_depth` (`rendered_depth.rs`).
+    pub fn new(gpu: &Gpu, scene: &GaussianScene, marked: Option<&[bool]>, median_depth: bool) -> Result<ViewRenderer> {
         let feature: Option<Vec<f32>> = marked.map(|r| r.iter().map(|&x| x as u8 as f32).collect());
         let renderer = SceneRenderer::new(gpu, scene, feature.as_deref().map(|f| (f, 1)))?;
-        Ok(ViewRenderer { renderer, features: marked.is_some() })
+        Ok(ViewRenderer { renderer, features: marked.is_some(), median_depth })
     }
 
     pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
-        let settings = RenderSettings { background, features: self.features, ..Default::default() };
+        let median_depth = self.median_depth;
+        let settings = RenderSettings { background, features: self.features, median_depth, ..Default::default() };
         let o = self.renderer.render(camera, &settings)?;
         let weight = if self.features { o.features } else { vec![0.0; o.alpha.len()] };
-        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth: o.expected_depth, weight })
+        let depth = if median_depth { o.median_depth } else { o.expected_depth };
+        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth, weight })
     }
 
     /// `render` of `window` of the view only (`refine::window_camera`: the whole view's pixels,
@@ -179,6 +187,8 @@ pub struct HoleConfig {
     /// Hole pixels a kept object covers with at least this alpha keep their render.
     pub keep_alpha: f32,
     pub background: [f32; 3],
+    /// The renders' depth is the median depth, not the expected one (`rendered_depth.rs`).
+    pub median_depth: bool,
 }
 
 /// Stage 2 for one edited view.
@@ -211,7 +221,7 @@ pub fn hole_masks(
     cfg: &HoleConfig,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<MaskedView>> {
-    let (mut original, mut remaining) = view_renderers(gpu, scene, selection)?;
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, cfg.median_depth)?;
     let mut views = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
@@ -239,10 +249,15 @@ pub fn hole_masks(
 /// scene after removal with the kept objects' weight. A scene without kept objects needs no
 /// weight of theirs: the feature blend was 40 % of a render on the statue (`Rendered::weight` is
 /// then zero everywhere).
-fn view_renderers(gpu: &Gpu, scene: &GaussianScene, selection: &Selection) -> Result<(ViewRenderer, ViewRenderer)> {
-    let original = ViewRenderer::new(gpu, scene, Some(&selection.removed))?;
+fn view_renderers(
+    gpu: &Gpu,
+    scene: &GaussianScene,
+    selection: &Selection,
+    median_depth: bool,
+) -> Result<(ViewRenderer, ViewRenderer)> {
+    let original = ViewRenderer::new(gpu, scene, Some(&selection.removed), median_depth)?;
     let kept = selection.kept_objects.iter().any(|&k| k).then_some(&selection.kept_objects[..]);
-    Ok((original, ViewRenderer::new(gpu, &selection.background, kept)?))
+    Ok((original, ViewRenderer::new(gpu, &selection.background, kept, median_depth)?))
 }
 
 /// The part of a `w` x `h` view's `hole` to synthesize (all of it but where a kept object covers
@@ -277,7 +292,7 @@ pub fn redraw_hole_masks(
     masked: &mut [MaskedView],
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<()> {
-    let (mut original, mut remaining) = view_renderers(gpu, scene, selection)?;
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, cfg.median_depth)?;
     let grow = cfg.dilate.max(0.0).ceil() as usize + 1;
     for (i, (cam, view)) in cameras.iter().zip(masked.iter_mut()).enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);

@@ -1,0 +1,167 @@
+//! The rendered depth the removal reads (removal/rendered_depth.rs), chosen by the captured
+//! photos: a textured wall at z = 5 (`common::wall`, whose photos are its closed form) rendered
+//! from Gaussians, with a removed square at z = 3 in front of it, and a layer that pulls one of the
+//! two rendered depths off the wall. The photos agree with the depth that stays on the wall, and
+//! the hole's completed depth must land there.
+
+mod common;
+
+use cogeo::removal::complete::{Completer, CompletionConfig};
+use cogeo::removal::rendered_depth::{choose, PhotoCost, RenderedDepth};
+use cogeo::removal::{remove, RemoveOptions, Stages};
+use cogeo::scene::{logit, GaussianScene, SH_C0};
+use common::wall;
+
+const W: usize = 96;
+const H: usize = 72;
+
+/// A square grid of Gaussians in the plane z (half extents `hx`, `hy`, spacing `step`, footprint
+/// 0.7 of it), colored by `color`, each with `opacity`.
+#[allow(clippy::too_many_arguments)]
+fn layer(
+    scene: &mut GaussianScene,
+    labels: &mut Vec<u8>,
+    z: f64,
+    (hx, hy, step): (f64, f64, f64),
+    opacity: f32,
+    label: u8,
+    color: &dyn Fn([f64; 3]) -> [f64; 3],
+) {
+    let (nx, ny) = ((hx / step).ceil() as i32, (hy / step).ceil() as i32);
+    for j in -ny..=ny {
+        for i in -nx..=nx {
+            let p = [i as f64 * step, j as f64 * step, z];
+            let dc = color(p).map(|c| ((c - 0.5) / SH_C0) as f32);
+            let s = (0.7 * step).ln() as f32;
+            scene.push(
+                p.map(|v| v as f32),
+                [s, s, (0.2 * step).ln() as f32],
+                [1.0, 0.0, 0.0, 0.0],
+                logit(opacity as f64),
+                &dc,
+            );
+            labels.push(label);
+        }
+    }
+}
+
+/// The wall (opacity `wall_opacity`), `extra` layers (z, opacity), and the removed dark square.
+fn scene(wall_opacity: f32, extra: &[(f64, f32)]) -> (GaussianScene, Vec<u8>) {
+    let mut scene = GaussianScene { sh_degree: 0, ..Default::default() };
+    let mut labels = Vec::new();
+    // one Gaussian per pixel or so at each depth (f = 83 pixels), over every view's frame
+    let grid = |z: f64| (0.8 * z + 1.6, 0.6 * z + 1.6, z / 83.0);
+    layer(&mut scene, &mut labels, wall::WALL_Z, grid(wall::WALL_Z), wall_opacity, 0, &wall::color);
+    for &(z, opacity) in extra {
+        // a farther layer shows the wall's texture (the photos' colors), a nearer one is grey
+        let color: &dyn Fn([f64; 3]) -> [f64; 3] = if z > wall::WALL_Z { &wall::color } else { &|_| [0.5; 3] };
+        layer(&mut scene, &mut labels, z, grid(z), opacity, 0, color);
+    }
+    layer(&mut scene, &mut labels, 3.0, (0.45, 0.45, 3.0 / 83.0), 0.99, 1, &|_| [0.15, 0.1, 0.1]);
+    (scene, labels)
+}
+
+/// Removes the square with `depth`, without refinement (the completions are what is compared).
+fn run(scene: &GaussianScene, labels: &[u8], depth: RenderedDepth) -> cogeo::removal::Removal {
+    let gpu = common::gpu();
+    let rig = wall::Rig::new(W, H);
+    let views: Vec<(String, (u32, u32))> = rig.cams.iter().map(|c| (c.name.clone(), (c.width, c.height))).collect();
+    let completer = Completer::load(&gpu, &CompletionConfig::default(), 0, &views).unwrap();
+    let opts = RemoveOptions {
+        labels: vec![1],
+        rendered_depth: depth,
+        stages: Stages { refine: false, ..RemoveOptions::default().stages },
+        ..Default::default()
+    };
+    remove(&gpu, scene, labels, &rig.cams, &rig.photos, 5.0, &opts, &completer, &mut |_, _, _| {}).unwrap()
+}
+
+/// The target view's fill pixels' completed depth relative to the wall's: median and the share
+/// within 2 %.
+fn hole_depth_error(r: &cogeo::removal::Removal) -> (f64, f64) {
+    let v = &r.views[0];
+    let mut errors: Vec<f64> =
+        (0..W * H).filter(|&p| v.fill[p]).map(|p| v.depth[p] as f64 / wall::WALL_Z - 1.0).collect();
+    assert!(errors.len() > 300, "the square's hole: {} fill pixels", errors.len());
+    let near = errors.iter().filter(|e| e.abs() < 0.02).count() as f64 / errors.len() as f64;
+    errors.sort_by(f64::total_cmp);
+    (errors[errors.len() / 2], near)
+}
+
+/// `Auto` kept the run of the depth it chose: the same views, bit for bit, as that depth forced.
+fn assert_same_views(auto: &cogeo::removal::Removal, forced: &cogeo::removal::Removal) {
+    for (a, f) in auto.views.iter().zip(&forced.views) {
+        assert!(a.depth == f.depth && a.inpainted == f.inpainted && a.fill == f.fill, "view {}", a.name);
+    }
+    assert_eq!(auto.scene.means, forced.scene.means);
+}
+
+/// A faint grey veil at z = 3.6 (alpha about 0.3) pulls the expected depth 8 % in front of the
+/// wall, beyond the 5 % the photo-consistent hole depth searches; the median depth stays on the
+/// wall. The photos prefer the median depth, and the hole's depth lands on the wall.
+#[test]
+fn a_veil_in_front_of_the_wall_makes_the_photos_choose_the_median_depth() {
+    let (scene, labels) = scene(0.99, &[(3.6, 0.08)]);
+    let auto = run(&scene, &labels, RenderedDepth::Auto);
+    let choice = auto.report.rendered_depth.clone().expect("completion ran");
+    let (e, m) = (choice.expected.expect("scored"), choice.median.expect("scored"));
+    assert_eq!(choice.chosen, RenderedDepth::Median, "{choice:?}");
+    assert!(m.cost < 0.5 * e.cost, "{choice:?}");
+    let (median_error, on_wall) = hole_depth_error(&auto);
+    assert!(
+        median_error.abs() < 0.01 && on_wall > 0.8,
+        "hole depth off the wall by {median_error}, {on_wall} within 2 %"
+    );
+    let expected = run(&scene, &labels, RenderedDepth::Expected);
+    let (median_error, _) = hole_depth_error(&expected);
+    assert!(median_error < -0.05, "the expected depth's hole lies {median_error} off the wall");
+    assert_eq!(expected.report.rendered_depth.unwrap().expected, Some(e), "the same run, the same cost");
+    assert_same_views(&auto, &run(&scene, &labels, RenderedDepth::Median));
+}
+
+/// The wall half transparent (alpha about 0.4) before a second layer of its texture 6 % behind
+/// it: the median depth lies on that layer, beyond the hole depth's search, the expected depth
+/// 3 % behind the wall, within it. The photos prefer the expected depth; Auto keeps its run.
+#[test]
+fn a_layer_behind_the_wall_makes_the_photos_choose_the_expected_depth() {
+    let (scene, labels) = scene(0.1, &[(5.3, 0.99)]);
+    let auto = run(&scene, &labels, RenderedDepth::Auto);
+    let choice = auto.report.rendered_depth.clone().expect("completion ran");
+    let (e, m) = (choice.expected.expect("scored"), choice.median.expect("scored"));
+    assert_eq!(choice.chosen, RenderedDepth::Expected, "{choice:?}");
+    assert!(e.cost < 0.5 * m.cost, "{choice:?}");
+    let (median_error, on_wall) = hole_depth_error(&auto);
+    assert!(
+        median_error.abs() < 0.01 && on_wall > 0.8,
+        "hole depth off the wall by {median_error}, {on_wall} within 2 %"
+    );
+    let median = run(&scene, &labels, RenderedDepth::Median);
+    let (median_error, _) = hole_depth_error(&median);
+    assert!(median_error > 0.04, "the median depth's hole lies {median_error} off the wall");
+    assert_same_views(&auto, &run(&scene, &labels, RenderedDepth::Expected));
+}
+
+/// The choice's rule and the pooled cost, in closed form: the pixel-weighted mean of the views'
+/// costs after the correction, views without a scored pixel (or a NaN cost) left out; the median
+/// depth only where both were scored and it costs strictly less.
+#[test]
+fn the_choice_pools_the_views_costs_by_their_pixels() {
+    use cogeo::removal::complete::photo_depth::DepthScale;
+    use cogeo::removal::view::ViewReport;
+    let report = |pixels, cost_after| ViewReport {
+        hole_depth_scale: Some(DepthScale { scale: 1.0, pixels, cost_before: 1.0, cost_after }),
+        ..Default::default()
+    };
+    let views =
+        [report(100, 0.002), report(300, 0.006), report(0, f64::NAN), report(50, f64::NAN), ViewReport::default()];
+    let pooled = PhotoCost::of(&views).unwrap();
+    assert_eq!(pooled.pixels, 400);
+    assert!((pooled.cost - (100.0 * 0.002 + 300.0 * 0.006) / 400.0).abs() < 1e-15, "{pooled:?}");
+    assert_eq!(PhotoCost::of(&[ViewReport::default()]), None);
+    let cost = |cost| Some(PhotoCost { cost, pixels: 10 });
+    assert_eq!(choose(cost(0.002), cost(0.001)), RenderedDepth::Median);
+    assert_eq!(choose(cost(0.001), cost(0.002)), RenderedDepth::Expected);
+    assert_eq!(choose(cost(0.001), cost(0.001)), RenderedDepth::Expected);
+    assert_eq!(choose(None, cost(0.001)), RenderedDepth::Expected);
+    assert_eq!(choose(cost(0.001), None), RenderedDepth::Expected);
+}
