@@ -99,9 +99,8 @@ pub struct RemoveOptions {
     /// completed surface the pixel gets no new Gaussian.
     #[arg(long, default_value_t = 0.9)]
     pub keep_alpha: f32,
-    /// The rendered depth the removal reads (rendered_depth.rs): auto (complete under both the
-    /// expected and the median depth, keep the one the captured photos agree with better),
-    /// expected or median.
+    /// The rendered depth the removal reads (the masks, the hull, the completion and the color
+    /// transfer; rendered_depth.rs).
     #[arg(long, value_enum, default_value_t)]
     pub rendered_depth: RenderedDepth,
     #[command(flatten)]

@@ -31,9 +31,9 @@ pub enum RenderedDepth {
     /// photos and the photo-consistent hole depth; the expected depth without them).
     #[default]
     Auto,
-    /// The expected depth.
+    /// The expected depth: the Gaussians' depths along the ray, weighted by their blending.
     Expected,
-    /// The median depth.
+    /// The median depth: the depth of the Gaussian that takes the transmittance to one half.
     Median,
 }
 
