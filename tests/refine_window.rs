@@ -7,7 +7,7 @@ mod common;
 
 use cogeo::image_ops::Rect;
 use cogeo::removal::refine::{refine_window, seen_by_any, window_camera};
-use cogeo::removal::select::ViewRenderer;
+use cogeo::removal::select::{DepthPlanes, ViewRenderer};
 use cogeo::render::{RenderSettings, SceneRenderer};
 use common::{random_scene, test_camera, SceneMix};
 
@@ -114,11 +114,12 @@ fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render(
     assert!(count > 3 && count < scene.len() / 3, "{count} of {} removed", scene.len());
     let remaining = scene.subset(&removed.iter().map(|&r| !r).collect::<Vec<_>>());
     let bg = [0.2f32, 0.4, 0.6];
-    let before = ViewRenderer::new(&gpu, &scene, Some(&removed), false).unwrap().render(&camera, bg).unwrap();
+    let before =
+        ViewRenderer::new(&gpu, &scene, Some(&removed), DepthPlanes::Expected).unwrap().render(&camera, bg).unwrap();
     let touched: Vec<bool> = before.weight.iter().map(|&x| x > 0.0).collect();
     let window = cogeo::image_ops::bounding_box(&touched, w).expect("the removed Gaussians show");
     assert!(window.width() * window.height() < w * h / 2, "window {window:?} is most of the view");
-    let mut after = ViewRenderer::new(&gpu, &remaining, None, false).unwrap();
+    let mut after = ViewRenderer::new(&gpu, &remaining, None, DepthPlanes::Expected).unwrap();
     let whole = after.render(&camera, bg).unwrap();
     let within = after.render_within(&camera, window, bg, &before).unwrap();
     let differ = |a: &[f32], b: &[f32]| {
@@ -135,7 +136,7 @@ fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render(
     assert!(changed > 50, "only {changed} pixels changed by the deletion");
     // with kept objects marked among the remaining Gaussians, their weight within the window
     let kept: Vec<bool> = remaining.means.iter().map(|m| m[1] > 0.0).collect();
-    let mut after = ViewRenderer::new(&gpu, &remaining, Some(&kept), false).unwrap();
+    let mut after = ViewRenderer::new(&gpu, &remaining, Some(&kept), DepthPlanes::Expected).unwrap();
     let whole = after.render(&camera, bg).unwrap();
     let within = after.render_within(&camera, window, bg, &before).unwrap();
     differ(&within.rgb, &whole.rgb);

@@ -53,7 +53,7 @@ use prune::PruneSettings;
 use refine::{RefineConfig, RefineReport};
 use rendered_depth::RenderedDepth;
 use report::{BackgroundPsnr, CompletionSummary, GaussianCounts, RemovalReport, StageClock};
-use select::{HoleConfig, Selection, ViewRenderer};
+use select::{DepthPlanes, HoleConfig, MaskedView, Selection, ViewRenderer};
 use view::EditedView;
 
 /// Which stages run (each can be switched off for ablations).
@@ -191,11 +191,26 @@ pub fn remove(
     // 2. to 3b., under the rendered depth the captured photos agree with (both tried for
     // `RenderedDepth::Auto`)
     let photo_depth = opts.stages.complete && !photos.is_empty() && completer.photo_depth;
+    let wanted = if opts.stages.complete { opts.rendered_depth } else { RenderedDepth::Expected };
     let inputs = StageInputs { gpu, scene, labels, cameras, photos, opts, completer };
+    // where both depths run, the masks of both come from one render of each view
+    let both = wanted == RenderedDepth::Auto && photo_depth;
+    let mut median_masks = None;
     let (staged, depth_choice) = rendered_depth::stage_in_chosen_depth(
-        if opts.stages.complete { opts.rendered_depth } else { RenderedDepth::Expected },
+        wanted,
         photo_depth,
-        &mut |median_depth, progress| stage_views(&inputs, selection.clone(), median_depth, &mut clock, progress),
+        &mut |median_depth, progress| {
+            let masked = match median_masks.take() {
+                Some(masked) if median_depth => masked,
+                _ => {
+                    let (masked, median) = draw_masks(&inputs, &selection, median_depth, both, progress)?;
+                    median_masks = median;
+                    masked
+                }
+            };
+            clock.lap("masks");
+            stage_views(&inputs, selection.clone(), masked, median_depth, &mut clock, progress)
+        },
         progress,
     )?;
     let Staged { mut views, selection, left_inside } = staged;
@@ -303,12 +318,47 @@ pub(crate) struct Staged<'a> {
     left_inside: usize,
 }
 
-/// Stages 2 to 3b with every render's depth the median one (`median_depth`) or the expected one:
-/// the hole masks, the Gaussians left inside the objects (which go with them, `selection` grows),
-/// then (unless removal only) completion and the photo-consistent hole depth.
+/// Stage 2 for `selection`, its renders' depth the median one (`median_depth`) or the expected
+/// one; with `both`, in the expected depth and (second) in the median one too.
+fn draw_masks(
+    inputs: &StageInputs,
+    selection: &Selection,
+    median_depth: bool,
+    both: bool,
+    progress: Progress,
+) -> Result<(Vec<MaskedView>, Option<Vec<MaskedView>>)> {
+    let StageInputs { gpu, scene, cameras, opts, .. } = *inputs;
+    let cfg = hole_config(opts, median_depth);
+    let mut progress = |d, t| progress("masks", d, t);
+    if both {
+        let (expected, median) =
+            select::hole_masks_in_both_depths(gpu, scene, selection, cameras, &cfg, &mut progress)?;
+        Ok((expected, Some(median)))
+    } else {
+        Ok((select::hole_masks(gpu, scene, selection, cameras, &cfg, &mut progress)?, None))
+    }
+}
+
+/// How stage 2 draws the holes, its renders' depth the median one (`median_depth`) or the
+/// expected one.
+fn hole_config(opts: &RemoveOptions, median_depth: bool) -> HoleConfig {
+    HoleConfig {
+        threshold: opts.hole_threshold,
+        dilate: opts.dilate,
+        keep_alpha: opts.keep_alpha,
+        background: opts.background,
+        median_depth,
+    }
+}
+
+/// Stages 1b to 3b on the views stage 2 `masked` for `selection`, every render's depth the
+/// median one (`median_depth`) or the expected one: the Gaussians left inside the objects (which
+/// go with them, `selection` grows), then (unless removal only) completion and the
+/// photo-consistent hole depth.
 fn stage_views<'a>(
     inputs: &StageInputs<'a>,
     mut selection: Selection,
+    mut masked: Vec<MaskedView>,
     median_depth: bool,
     clock: &mut StageClock,
     progress: Progress,
@@ -320,16 +370,7 @@ fn stage_views<'a>(
         false => progress(stage, done, total),
     };
     let progress: Progress = &mut labelled;
-    // 2. hole masks, from renders before and after deletion
-    let holes = HoleConfig {
-        threshold: opts.hole_threshold,
-        dilate: opts.dilate,
-        keep_alpha: opts.keep_alpha,
-        background: opts.background,
-        median_depth,
-    };
-    let mut masked = select::hole_masks(gpu, scene, &selection, cameras, &holes, &mut |d, t| progress("masks", d, t))?;
-    clock.lap("masks");
+    let holes = hole_config(opts, median_depth);
     // 1b. the background Gaussians the tagging left inside the objects go too (and the holes are
     // drawn again without them)
     let left_inside = hull::remove_leftovers_inside(
@@ -551,7 +592,7 @@ fn final_renders(
     background: [f32; 3],
     progress: Progress,
 ) -> Result<(Vec<Vec<f32>>, Vec<f64>)> {
-    let mut renderer = ViewRenderer::new(gpu, scene, None, false)?;
+    let mut renderer = ViewRenderer::new(gpu, scene, None, DepthPlanes::Expected)?;
     let (mut after, mut bg_psnr) = (Vec::new(), Vec::new());
     for (i, v) in views.iter().enumerate() {
         let rgb = renderer.render(v.camera, background)?.rgb;

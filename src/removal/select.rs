@@ -53,40 +53,55 @@ pub fn select_gaussians(scene: &GaussianScene, labels: &[u8], chosen: &[u8]) -> 
     Ok(Selection { removed, count, background, kept_objects })
 }
 
-/// Renders RGB, alpha, depth (expected or median) and (with `marked`) the marked Gaussians'
-/// weight.
+/// Which depth planes a `ViewRenderer` gives (`rendered_depth.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthPlanes {
+    /// The expected depth as `Rendered::depth`.
+    Expected,
+    /// The median depth as `Rendered::depth`.
+    Median,
+    /// The expected depth as `Rendered::depth` and the median one as `Rendered::median`.
+    Both,
+}
+
+/// Renders RGB, alpha, depth and (with `marked`) the marked Gaussians' weight.
 pub struct ViewRenderer {
     renderer: SceneRenderer,
     features: bool,
-    median_depth: bool,
+    planes: DepthPlanes,
 }
 
 /// One render of a view (planar RGB, alpha, depth; the marked Gaussians' weight, zero where none
 /// were marked).
+#[derive(Clone)]
 pub struct Rendered {
     pub rgb: Vec<f32>,
     pub alpha: Vec<f32>,
     /// The expected depth, or the median depth where the renderer was made to read it.
     pub depth: Vec<f32>,
     pub weight: Vec<f32>,
+    /// The median depth beside the expected one (`DepthPlanes::Both`); empty otherwise.
+    pub median: Vec<f32>,
 }
 
 impl ViewRenderer {
-    /// A renderer whose `Rendered::depth` is the expected depth, or the median depth with
-    /// `median_depth` (`rendered_depth.rs`).
-    pub fn new(gpu: &Gpu, scene: &GaussianScene, marked: Option<&[bool]>, median_depth: bool) -> Result<ViewRenderer> {
+    pub fn new(gpu: &Gpu, scene: &GaussianScene, marked: Option<&[bool]>, planes: DepthPlanes) -> Result<ViewRenderer> {
         let feature: Option<Vec<f32>> = marked.map(|r| r.iter().map(|&x| x as u8 as f32).collect());
         let renderer = SceneRenderer::new(gpu, scene, feature.as_deref().map(|f| (f, 1)))?;
-        Ok(ViewRenderer { renderer, features: marked.is_some(), median_depth })
+        Ok(ViewRenderer { renderer, features: marked.is_some(), planes })
     }
 
     pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
-        let median_depth = self.median_depth;
+        let median_depth = self.planes != DepthPlanes::Expected;
         let settings = RenderSettings { background, features: self.features, median_depth, ..Default::default() };
         let o = self.renderer.render(camera, &settings)?;
         let weight = if self.features { o.features } else { vec![0.0; o.alpha.len()] };
-        let depth = if median_depth { o.median_depth } else { o.expected_depth };
-        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth, weight })
+        let (depth, median) = match self.planes {
+            DepthPlanes::Expected => (o.expected_depth, Vec::new()),
+            DepthPlanes::Median => (o.median_depth, Vec::new()),
+            DepthPlanes::Both => (o.expected_depth, o.median_depth),
+        };
+        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth, weight, median })
     }
 
     /// `render` of `window` of the view only (`refine::window_camera`: the whole view's pixels,
@@ -106,6 +121,7 @@ impl ViewRenderer {
             alpha: outside.alpha.clone(),
             depth: outside.depth.clone(),
             weight: vec![0.0; outside.alpha.len()],
+            median: outside.median.clone(),
         };
         whole.paste(window, &part, camera.width as usize);
         Ok(whole)
@@ -124,6 +140,9 @@ impl Rendered {
             self.alpha[p] = part.alpha[k];
             self.depth[p] = part.depth[k];
             self.weight[p] = part.weight[k];
+            if !part.median.is_empty() {
+                self.median[p] = part.median[k];
+            }
         }
     }
 
@@ -192,6 +211,7 @@ pub struct HoleConfig {
 }
 
 /// Stage 2 for one edited view.
+#[derive(Clone)]
 pub struct MaskedView {
     /// Original render: RGB, and the alpha and expected depth that color transfer checks; its
     /// `weight` is the removed Gaussians'.
@@ -221,7 +241,47 @@ pub fn hole_masks(
     cfg: &HoleConfig,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<MaskedView>> {
-    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, cfg.median_depth)?;
+    let planes = if cfg.median_depth { DepthPlanes::Median } else { DepthPlanes::Expected };
+    masks_with(gpu, scene, selection, cameras, cfg, planes, progress)
+}
+
+/// `hole_masks` in the expected depth and in the median depth (`cfg.median_depth` aside), from
+/// one render of each view: the depth is all they differ by.
+pub fn hole_masks_in_both_depths(
+    gpu: &Gpu,
+    scene: &GaussianScene,
+    selection: &Selection,
+    cameras: &[Camera],
+    cfg: &HoleConfig,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<(Vec<MaskedView>, Vec<MaskedView>)> {
+    let mut expected = masks_with(gpu, scene, selection, cameras, cfg, DepthPlanes::Both, progress)?;
+    let median = expected
+        .iter_mut()
+        .map(|m| {
+            let mut twin = m.clone();
+            for r in [&mut twin.before, &mut twin.after_removal] {
+                r.depth = std::mem::take(&mut r.median);
+            }
+            for r in [&mut m.before, &mut m.after_removal] {
+                r.median = Vec::new();
+            }
+            twin
+        })
+        .collect();
+    Ok((expected, median))
+}
+
+fn masks_with(
+    gpu: &Gpu,
+    scene: &GaussianScene,
+    selection: &Selection,
+    cameras: &[Camera],
+    cfg: &HoleConfig,
+    planes: DepthPlanes,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<MaskedView>> {
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, planes)?;
     let mut views = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
@@ -253,11 +313,11 @@ fn view_renderers(
     gpu: &Gpu,
     scene: &GaussianScene,
     selection: &Selection,
-    median_depth: bool,
+    planes: DepthPlanes,
 ) -> Result<(ViewRenderer, ViewRenderer)> {
-    let original = ViewRenderer::new(gpu, scene, Some(&selection.removed), median_depth)?;
+    let original = ViewRenderer::new(gpu, scene, Some(&selection.removed), planes)?;
     let kept = selection.kept_objects.iter().any(|&k| k).then_some(&selection.kept_objects[..]);
-    Ok((original, ViewRenderer::new(gpu, &selection.background, kept, median_depth)?))
+    Ok((original, ViewRenderer::new(gpu, &selection.background, kept, planes)?))
 }
 
 /// The part of a `w` x `h` view's `hole` to synthesize (all of it but where a kept object covers
@@ -292,7 +352,8 @@ pub fn redraw_hole_masks(
     masked: &mut [MaskedView],
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<()> {
-    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, cfg.median_depth)?;
+    let planes = if cfg.median_depth { DepthPlanes::Median } else { DepthPlanes::Expected };
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, planes)?;
     let grow = cfg.dilate.max(0.0).ceil() as usize + 1;
     for (i, (cam, view)) in cameras.iter().zip(masked.iter_mut()).enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
