@@ -51,9 +51,9 @@ use consensus::ConsensusView;
 use fuse::{FuseConfig, FuseView, Patched};
 use prune::PruneSettings;
 use refine::{RefineConfig, RefineReport};
-use rendered_depth::RenderedDepth;
+use rendered_depth::{RenderedDepth, StageInputs, Staged};
 use report::{BackgroundPsnr, CompletionSummary, GaussianCounts, RemovalReport, StageClock};
-use select::{DepthPlanes, HoleConfig, MaskedView, Selection, ViewRenderer};
+use select::{DepthPlanes, Selection, ViewRenderer};
 use view::EditedView;
 
 /// Which stages run (each can be switched off for ablations).
@@ -190,29 +190,8 @@ pub fn remove(
     clock.lap("select");
     // 2. to 3b., under the rendered depth the captured photos agree with (both tried for
     // `RenderedDepth::Auto`)
-    let photo_depth = opts.stages.complete && !photos.is_empty() && completer.photo_depth;
-    let wanted = if opts.stages.complete { opts.rendered_depth } else { RenderedDepth::Expected };
     let inputs = StageInputs { gpu, scene, labels, cameras, photos, opts, completer };
-    // where both depths run, the masks of both come from one render of each view
-    let both = wanted == RenderedDepth::Auto && photo_depth;
-    let mut median_masks = None;
-    let (staged, depth_choice) = rendered_depth::stage_in_chosen_depth(
-        wanted,
-        photo_depth,
-        &mut |median_depth, progress| {
-            let masked = match median_masks.take() {
-                Some(masked) if median_depth => masked,
-                _ => {
-                    let (masked, median) = draw_masks(&inputs, &selection, median_depth, both, progress)?;
-                    median_masks = median;
-                    masked
-                }
-            };
-            clock.lap("masks");
-            stage_views(&inputs, selection.clone(), masked, median_depth, &mut clock, progress)
-        },
-        progress,
-    )?;
+    let (staged, depth_choice) = rendered_depth::stage_in_chosen_depth(&inputs, &selection, &mut clock, progress)?;
     let Staged { mut views, selection, left_inside } = staged;
     let Selection { removed, count: removed_count, background, .. } = selection;
     let mut result = background;
@@ -298,109 +277,6 @@ fn check_inputs(
         }
     }
     Ok(())
-}
-
-/// What stages 2 to 3b read: `remove`'s arguments.
-struct StageInputs<'a> {
-    gpu: &'a Gpu,
-    scene: &'a GaussianScene,
-    labels: &'a [u8],
-    cameras: &'a [Camera],
-    photos: &'a [Vec<f32>],
-    opts: &'a RemoveOptions,
-    completer: &'a Completer,
-}
-
-/// The edited views after stage 3b, the selection the hull grew and the Gaussians it took.
-pub(crate) struct Staged<'a> {
-    views: Vec<EditedView<'a>>,
-    selection: Selection,
-    left_inside: usize,
-}
-
-/// Stage 2 for `selection`, its renders' depth the median one (`median_depth`) or the expected
-/// one; with `both`, in the expected depth and (second) in the median one too.
-fn draw_masks(
-    inputs: &StageInputs,
-    selection: &Selection,
-    median_depth: bool,
-    both: bool,
-    progress: Progress,
-) -> Result<(Vec<MaskedView>, Option<Vec<MaskedView>>)> {
-    let StageInputs { gpu, scene, cameras, opts, .. } = *inputs;
-    let cfg = hole_config(opts, median_depth);
-    let mut progress = |d, t| progress("masks", d, t);
-    if both {
-        let (expected, median) =
-            select::hole_masks_in_both_depths(gpu, scene, selection, cameras, &cfg, &mut progress)?;
-        Ok((expected, Some(median)))
-    } else {
-        Ok((select::hole_masks(gpu, scene, selection, cameras, &cfg, &mut progress)?, None))
-    }
-}
-
-/// How stage 2 draws the holes, its renders' depth the median one (`median_depth`) or the
-/// expected one.
-fn hole_config(opts: &RemoveOptions, median_depth: bool) -> HoleConfig {
-    HoleConfig {
-        threshold: opts.hole_threshold,
-        dilate: opts.dilate,
-        keep_alpha: opts.keep_alpha,
-        background: opts.background,
-        median_depth,
-    }
-}
-
-/// Stages 1b to 3b on the views stage 2 `masked` for `selection`, every render's depth the
-/// median one (`median_depth`) or the expected one: the Gaussians left inside the objects (which
-/// go with them, `selection` grows), then (unless removal only) completion and the
-/// photo-consistent hole depth.
-fn stage_views<'a>(
-    inputs: &StageInputs<'a>,
-    mut selection: Selection,
-    mut masked: Vec<MaskedView>,
-    median_depth: bool,
-    clock: &mut StageClock,
-    progress: Progress,
-) -> Result<Staged<'a>> {
-    let StageInputs { gpu, scene, labels, cameras, photos, opts, completer } = *inputs;
-    // `Auto` runs these stages twice: the second run's progress says which depth it reads
-    let mut labelled = |stage: &str, done, total| match median_depth {
-        true => progress(&format!("{stage} (median depth)"), done, total),
-        false => progress(stage, done, total),
-    };
-    let progress: Progress = &mut labelled;
-    let holes = hole_config(opts, median_depth);
-    // 1b. the background Gaussians the tagging left inside the objects go too (and the holes are
-    // drawn again without them)
-    let left_inside = hull::remove_leftovers_inside(
-        gpu,
-        scene,
-        labels,
-        &opts.labels,
-        cameras,
-        &holes,
-        &opts.hull,
-        &mut selection,
-        &mut masked,
-        &mut |d, t| progress("hull", d, t),
-    )?;
-    clock.lap("hull");
-    let mut views: Vec<EditedView> = masked
-        .into_iter()
-        .enumerate()
-        .map(|(i, m)| EditedView::new(&cameras[i], photos.get(i).map(|p| p.as_slice()), m))
-        .collect();
-    if opts.stages.complete {
-        // 3. completion, 3b. the hole depth the captured photos agree on
-        complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
-        clock.lap("complete");
-        if !photos.is_empty() && completer.photo_depth {
-            correct_depths(&mut views, cameras, completer, progress);
-            clock.lap("photo_depth");
-        }
-    }
-    Ok(Staged { views, selection, left_inside })
 }
 
 /// Stage 3 over every view.

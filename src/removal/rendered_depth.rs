@@ -19,8 +19,13 @@
 //! and keeps the one with the lower mean cost, weighted by the pixels it scored; it needs the
 //! photos and the photo-consistent hole depth.
 
-use super::view::ViewReport;
-use super::{Progress, Staged};
+use super::complete::Completer;
+use super::report::StageClock;
+use super::select::{self, HoleConfig, MaskedView, Selection};
+use super::view::{EditedView, ViewReport};
+use super::{complete_views, correct_depths, hull, Progress, RemoveOptions};
+use crate::gpu::Gpu;
+use crate::scene::{Camera, GaussianScene};
 use anyhow::Result;
 
 /// The rendered depth the removal reads (`--rendered-depth`).
@@ -89,10 +94,44 @@ pub fn choose(expected: Option<PhotoCost>, median: Option<PhotoCost>) -> Rendere
     }
 }
 
+/// Stages 2 to 3b of `remove` for `selection` under the rendered depth `--rendered-depth` names,
+/// or under both for `Auto` where the photos and the photo-consistent hole depth can judge them
+/// (the masks of both then from one render of each view): the views of the one kept, and the
+/// choice.
+pub(super) fn stage_in_chosen_depth<'a>(
+    inputs: &StageInputs<'a>,
+    selection: &Selection,
+    clock: &mut StageClock,
+    progress: Progress,
+) -> Result<(Staged<'a>, DepthChoice)> {
+    let StageInputs { photos, opts, completer, .. } = *inputs;
+    let photo_depth = opts.stages.complete && !photos.is_empty() && completer.photo_depth;
+    let wanted = if opts.stages.complete { opts.rendered_depth } else { RenderedDepth::Expected };
+    let both = wanted == RenderedDepth::Auto && photo_depth;
+    let mut median_masks = None;
+    run_in_chosen_depth(
+        wanted,
+        photo_depth,
+        &mut |median_depth, progress| {
+            let masked = match median_masks.take() {
+                Some(masked) if median_depth => masked,
+                _ => {
+                    let (masked, median) = draw_masks(inputs, selection, median_depth, both, progress)?;
+                    median_masks = median;
+                    masked
+                }
+            };
+            clock.lap("masks");
+            stage_views(inputs, selection.clone(), masked, median_depth, clock, progress)
+        },
+        progress,
+    )
+}
+
 /// Stages 2 to 3b (`run`, given whether to read the median depth) under the rendered depth
 /// `wanted` names, or under both for `Auto` where `photo_depth` (the photos and the
 /// photo-consistent hole depth) can judge them; the views of the one kept, and the choice.
-pub(super) fn stage_in_chosen_depth<'a>(
+fn run_in_chosen_depth<'a>(
     wanted: RenderedDepth,
     photo_depth: bool,
     run: &mut dyn FnMut(bool, Progress) -> Result<Staged<'a>>,
@@ -135,4 +174,107 @@ pub(super) fn stage_in_chosen_depth<'a>(
             }
         }
     }
+}
+
+/// What stages 2 to 3b read: `remove`'s arguments.
+pub(super) struct StageInputs<'a> {
+    pub gpu: &'a Gpu,
+    pub scene: &'a GaussianScene,
+    pub labels: &'a [u8],
+    pub cameras: &'a [Camera],
+    pub photos: &'a [Vec<f32>],
+    pub opts: &'a RemoveOptions,
+    pub completer: &'a Completer,
+}
+
+/// The edited views after stage 3b, the selection the hull grew and the Gaussians it took.
+pub(super) struct Staged<'a> {
+    pub views: Vec<EditedView<'a>>,
+    pub selection: Selection,
+    pub left_inside: usize,
+}
+
+/// Stage 2 for `selection`, its renders' depth the median one (`median_depth`) or the expected
+/// one; with `both`, in the expected depth and (second) in the median one too.
+fn draw_masks(
+    inputs: &StageInputs,
+    selection: &Selection,
+    median_depth: bool,
+    both: bool,
+    progress: Progress,
+) -> Result<(Vec<MaskedView>, Option<Vec<MaskedView>>)> {
+    let StageInputs { gpu, scene, cameras, opts, .. } = *inputs;
+    let cfg = hole_config(opts, median_depth);
+    let mut progress = |d, t| progress("masks", d, t);
+    if both {
+        let (expected, median) =
+            select::hole_masks_in_both_depths(gpu, scene, selection, cameras, &cfg, &mut progress)?;
+        Ok((expected, Some(median)))
+    } else {
+        Ok((select::hole_masks(gpu, scene, selection, cameras, &cfg, &mut progress)?, None))
+    }
+}
+
+/// How stage 2 draws the holes, its renders' depth the median one (`median_depth`) or the
+/// expected one.
+fn hole_config(opts: &RemoveOptions, median_depth: bool) -> HoleConfig {
+    HoleConfig {
+        threshold: opts.hole_threshold,
+        dilate: opts.dilate,
+        keep_alpha: opts.keep_alpha,
+        background: opts.background,
+        median_depth,
+    }
+}
+
+/// Stages 1b to 3b on the views stage 2 `masked` for `selection`, every render's depth the
+/// median one (`median_depth`) or the expected one: the Gaussians left inside the objects (which
+/// go with them, `selection` grows), then (unless removal only) completion and the
+/// photo-consistent hole depth.
+fn stage_views<'a>(
+    inputs: &StageInputs<'a>,
+    mut selection: Selection,
+    mut masked: Vec<MaskedView>,
+    median_depth: bool,
+    clock: &mut StageClock,
+    progress: Progress,
+) -> Result<Staged<'a>> {
+    let StageInputs { gpu, scene, labels, cameras, photos, opts, completer } = *inputs;
+    // `Auto` runs these stages twice: the second run's progress says which depth it reads
+    let mut labelled = |stage: &str, done, total| match median_depth {
+        true => progress(&format!("{stage} (median depth)"), done, total),
+        false => progress(stage, done, total),
+    };
+    let progress: Progress = &mut labelled;
+    let holes = hole_config(opts, median_depth);
+    // 1b. the background Gaussians the tagging left inside the objects go too (and the holes are
+    // drawn again without them)
+    let left_inside = hull::remove_leftovers_inside(
+        gpu,
+        scene,
+        labels,
+        &opts.labels,
+        cameras,
+        &holes,
+        &opts.hull,
+        &mut selection,
+        &mut masked,
+        &mut |d, t| progress("hull", d, t),
+    )?;
+    clock.lap("hull");
+    let mut views: Vec<EditedView> = masked
+        .into_iter()
+        .enumerate()
+        .map(|(i, m)| EditedView::new(&cameras[i], photos.get(i).map(|p| p.as_slice()), m))
+        .collect();
+    if opts.stages.complete {
+        // 3. completion, 3b. the hole depth the captured photos agree on
+        complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
+        clock.lap("complete");
+        if !photos.is_empty() && completer.photo_depth {
+            correct_depths(&mut views, cameras, completer, progress);
+            clock.lap("photo_depth");
+        }
+    }
+    Ok(Staged { views, selection, left_inside })
 }
