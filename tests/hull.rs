@@ -7,7 +7,7 @@
 mod common;
 
 use cogeo::removal::hull::{leftovers_inside, remove_leftovers_inside, HullConfig};
-use cogeo::removal::select::{hole_masks, select_gaussians, splat_window, HoleConfig, MaskedView};
+use cogeo::removal::select::{hole_masks, select_gaussians, splat_window, DepthPlanes, HoleConfig, MaskedView};
 use cogeo::render::reference::render_reference;
 use cogeo::scene::{logit, Camera, GaussianScene, SH_C0};
 
@@ -95,7 +95,8 @@ fn the_missed_gaussians_of_a_removed_box_go_and_the_floor_under_it_stays() {
     let labels: Vec<u8> = parts.iter().map(|p| (*p == Part::Tagged) as u8).collect();
     let cams = cameras();
     let selection = select_gaussians(&scene, &labels, &[1]).unwrap();
-    let holes = HoleConfig { threshold: 0.3, dilate: 2.0, keep_alpha: 0.9, background: [0.0; 3], median_depth: false };
+    let holes =
+        HoleConfig { threshold: 0.3, dilate: 2.0, keep_alpha: 0.9, background: [0.0; 3], depth: DepthPlanes::Expected };
     let masked = hole_masks(&gpu, &scene, &selection, &cams, &holes, &mut |_, _| {}).unwrap();
     let cfg = HullConfig::default();
     let mut peeled = select_gaussians(&scene, &labels, &[1]).unwrap();

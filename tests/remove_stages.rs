@@ -383,7 +383,7 @@ fn photo_consistent_depth_undoes_a_biased_hole_depth() {
 /// than `LEFTOVER_IN_FRONT` in front of it), one just behind it does.
 #[test]
 fn hole_fill_keeps_only_kept_objects_not_the_background_left_behind() {
-    use cogeo::removal::select::{hole_masks, select_gaussians, HoleConfig, LEFTOVER_IN_FRONT};
+    use cogeo::removal::select::{hole_masks, select_gaussians, DepthPlanes, HoleConfig, LEFTOVER_IN_FRONT};
     use cogeo::scene::{Camera, GaussianScene};
     let gpu = common::gpu();
     let (w, h) = (48usize, 32usize);
@@ -405,7 +405,8 @@ fn hole_fill_keeps_only_kept_objects_not_the_background_left_behind() {
     layer(16, 32, 8, 24, 3.0, 1, 0.2); // the box to remove
     layer(26, 40, 10, 22, 4.0, 2, 0.5); // the kept object, behind the box
     let selection = select_gaussians(&scene, &labels, &[1]).unwrap();
-    let cfg = HoleConfig { threshold: 0.3, dilate: 2.0, keep_alpha: 0.9, background: [0.0; 3], median_depth: false };
+    let cfg =
+        HoleConfig { threshold: 0.3, dilate: 2.0, keep_alpha: 0.9, background: [0.0; 3], depth: DepthPlanes::Expected };
     let views = hole_masks(&gpu, &scene, &selection, std::slice::from_ref(&cam), &cfg, &mut |_, _| {}).unwrap();
     let m = &views[0];
     let at = |x: usize, y: usize| y * w + x;

@@ -163,38 +163,32 @@ fn the_choice_pools_the_views_costs_by_their_pixels() {
 /// bit for bit; on the veiled wall the two depths differ by the veil's pull.
 #[test]
 fn masks_in_both_depths_are_the_masks_of_each() {
-    use cogeo::removal::select::{hole_masks, hole_masks_in_both_depths, select_gaussians, HoleConfig, MaskedView};
+    use cogeo::removal::select::{hole_masks, select_gaussians, DepthPlanes, HoleConfig, MaskedView, Rendered};
     let gpu = common::gpu();
     let (scene, labels) = scene(0.99, &[(3.6, 0.08)]);
     let rig = wall::Rig::new(W, H);
     let selection = select_gaussians(&scene, &labels, &[1]).unwrap();
-    let cfg =
-        |median_depth| HoleConfig { threshold: 0.3, dilate: 2.0, keep_alpha: 0.9, background: [0.0; 3], median_depth };
-    let alone =
-        |median_depth| hole_masks(&gpu, &scene, &selection, &rig.cams, &cfg(median_depth), &mut |_, _| {}).unwrap();
-    let (expected, median) =
-        hole_masks_in_both_depths(&gpu, &scene, &selection, &rig.cams, &cfg(false), &mut |_, _| {}).unwrap();
+    let masks = |depth| {
+        let cfg = HoleConfig { threshold: 0.3, dilate: 2.0, keep_alpha: 0.9, background: [0.0; 3], depth };
+        hole_masks(&gpu, &scene, &selection, &rig.cams, &cfg, &mut |_, _| {}).unwrap()
+    };
+    let mut expected = masks(DepthPlanes::Both);
+    let median: Vec<MaskedView> = expected.iter_mut().map(MaskedView::take_median_twin).collect();
     let same = |a: &[MaskedView], b: &[MaskedView]| {
+        let r = |x: &Rendered, y: &Rendered| {
+            (x.rgb == y.rgb && x.alpha == y.alpha && x.depth == y.depth && x.weight == y.weight)
+                && (x.median.is_empty() && y.median.is_empty())
+        };
         a.len() == b.len()
             && a.iter().zip(b).all(|(a, b)| {
-                let r = |x: &cogeo::removal::select::Rendered, y: &cogeo::removal::select::Rendered| {
-                    x.rgb == y.rgb
-                        && x.alpha == y.alpha
-                        && x.depth == y.depth
-                        && x.weight == y.weight
-                        && x.median.is_empty()
-                        && y.median.is_empty()
-                };
-                r(&a.before, &b.before)
-                    && r(&a.after_removal, &b.after_removal)
-                    && a.hole == b.hole
-                    && a.fill == b.fill
-                    && a.footprint == b.footprint
+                (r(&a.before, &b.before) && r(&a.after_removal, &b.after_removal))
+                    && (a.hole == b.hole && a.fill == b.fill && a.footprint == b.footprint)
             })
     };
-    assert!(same(&expected, &alone(false)), "the expected depth's masks");
-    assert!(same(&median, &alone(true)), "the median depth's masks");
-    // away from the square, the veil pulls the expected depth to about 4.55, the median stays on the wall
+    assert!(same(&expected, &masks(DepthPlanes::Expected)), "the expected depth's masks");
+    assert!(same(&median, &masks(DepthPlanes::Median)), "the median depth's masks");
+    // away from the square the veil pulls the expected depth to about 4.55; the median stays on
+    // the wall
     let p = 10 * W + 10;
     let (e, m) = (expected[0].before.depth[p], median[0].before.depth[p]);
     assert!((m - 5.0).abs() < 0.05 && e < 4.7, "expected {e}, median {m}");

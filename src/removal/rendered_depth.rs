@@ -21,7 +21,7 @@
 
 use super::complete::Completer;
 use super::report::StageClock;
-use super::select::{self, HoleConfig, MaskedView, Selection};
+use super::select::{self, DepthPlanes, HoleConfig, MaskedView, Selection};
 use super::view::{EditedView, ViewReport};
 use super::{complete_views, correct_depths, hull, Progress, RemoveOptions};
 use crate::gpu::Gpu;
@@ -195,7 +195,7 @@ pub(super) struct Staged<'a> {
 }
 
 /// Stage 2 for `selection`, its renders' depth the median one (`median_depth`) or the expected
-/// one; with `both`, in the expected depth and (second) in the median one too.
+/// one; with `both`, in the expected depth and (second) in the median one too, from one render.
 fn draw_masks(
     inputs: &StageInputs,
     selection: &Selection,
@@ -204,14 +204,19 @@ fn draw_masks(
     progress: Progress,
 ) -> Result<(Vec<MaskedView>, Option<Vec<MaskedView>>)> {
     let StageInputs { gpu, scene, cameras, opts, .. } = *inputs;
-    let cfg = hole_config(opts, median_depth);
-    let mut progress = |d, t| progress("masks", d, t);
-    if both {
-        let (expected, median) =
-            select::hole_masks_in_both_depths(gpu, scene, selection, cameras, &cfg, &mut progress)?;
-        Ok((expected, Some(median)))
+    let depth = if both { DepthPlanes::Both } else { depth_planes(median_depth) };
+    let cfg = HoleConfig { depth, ..hole_config(opts, median_depth) };
+    let mut masked = select::hole_masks(gpu, scene, selection, cameras, &cfg, &mut |d, t| progress("masks", d, t))?;
+    let median = both.then(|| masked.iter_mut().map(MaskedView::take_median_twin).collect());
+    Ok((masked, median))
+}
+
+/// The depth plane the renders give: the median (`median_depth`) or the expected depth.
+fn depth_planes(median_depth: bool) -> DepthPlanes {
+    if median_depth {
+        DepthPlanes::Median
     } else {
-        Ok((select::hole_masks(gpu, scene, selection, cameras, &cfg, &mut progress)?, None))
+        DepthPlanes::Expected
     }
 }
 
@@ -223,7 +228,7 @@ fn hole_config(opts: &RemoveOptions, median_depth: bool) -> HoleConfig {
         dilate: opts.dilate,
         keep_alpha: opts.keep_alpha,
         background: opts.background,
-        median_depth,
+        depth: depth_planes(median_depth),
     }
 }
 

@@ -164,6 +164,18 @@ const KEPT_OBJECT_SHARE: f32 = 0.5;
 pub const LEFTOVER_IN_FRONT: f32 = 0.06;
 
 impl MaskedView {
+    /// Of a view drawn with `DepthPlanes::Both`, the same view reading the median depth; this one
+    /// keeps the expected depth alone.
+    pub fn take_median_twin(&mut self) -> MaskedView {
+        let mut twin = self.clone();
+        for (r, t) in [(&mut self.before, &mut twin.before), (&mut self.after_removal, &mut twin.after_removal)] {
+            assert_eq!(r.median.len(), r.depth.len(), "the median depth was not rendered");
+            t.depth = std::mem::take(&mut r.median);
+            t.median = Vec::new();
+        }
+        twin
+    }
+
     /// The fill pixels that become patch Gaussians at the completed `depth`: all of them except
     /// those that Gaussians left behind a removed object cover (alpha at least `keep_alpha`) more
     /// than `LEFTOVER_IN_FRONT` in front of that depth. Their colors still come from the
@@ -206,8 +218,8 @@ pub struct HoleConfig {
     /// Hole pixels a kept object covers with at least this alpha keep their render.
     pub keep_alpha: f32,
     pub background: [f32; 3],
-    /// The renders' depth is the median depth, not the expected one (`rendered_depth.rs`).
-    pub median_depth: bool,
+    /// The renders' depth planes: the expected or the median depth, or both (`rendered_depth.rs`).
+    pub depth: DepthPlanes,
 }
 
 /// Stage 2 for one edited view.
@@ -241,47 +253,7 @@ pub fn hole_masks(
     cfg: &HoleConfig,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<MaskedView>> {
-    let planes = if cfg.median_depth { DepthPlanes::Median } else { DepthPlanes::Expected };
-    masks_with(gpu, scene, selection, cameras, cfg, planes, progress)
-}
-
-/// `hole_masks` in the expected depth and in the median depth (`cfg.median_depth` aside), from
-/// one render of each view: the depth is all they differ by.
-pub fn hole_masks_in_both_depths(
-    gpu: &Gpu,
-    scene: &GaussianScene,
-    selection: &Selection,
-    cameras: &[Camera],
-    cfg: &HoleConfig,
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<(Vec<MaskedView>, Vec<MaskedView>)> {
-    let mut expected = masks_with(gpu, scene, selection, cameras, cfg, DepthPlanes::Both, progress)?;
-    let median = expected
-        .iter_mut()
-        .map(|m| {
-            let mut twin = m.clone();
-            for r in [&mut twin.before, &mut twin.after_removal] {
-                r.depth = std::mem::take(&mut r.median);
-            }
-            for r in [&mut m.before, &mut m.after_removal] {
-                r.median = Vec::new();
-            }
-            twin
-        })
-        .collect();
-    Ok((expected, median))
-}
-
-fn masks_with(
-    gpu: &Gpu,
-    scene: &GaussianScene,
-    selection: &Selection,
-    cameras: &[Camera],
-    cfg: &HoleConfig,
-    planes: DepthPlanes,
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Vec<MaskedView>> {
-    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, planes)?;
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, cfg.depth)?;
     let mut views = Vec::new();
     for (i, cam) in cameras.iter().enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
@@ -352,8 +324,7 @@ pub fn redraw_hole_masks(
     masked: &mut [MaskedView],
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<()> {
-    let planes = if cfg.median_depth { DepthPlanes::Median } else { DepthPlanes::Expected };
-    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, planes)?;
+    let (mut original, mut remaining) = view_renderers(gpu, scene, selection, cfg.depth)?;
     let grow = cfg.dilate.max(0.0).ceil() as usize + 1;
     for (i, (cam, view)) in cameras.iter().zip(masked.iter_mut()).enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
