@@ -225,8 +225,8 @@ pub struct HoleConfig {
 /// Stage 2 for one edited view.
 #[derive(Clone)]
 pub struct MaskedView {
-    /// Original render: RGB, and the alpha and expected depth that color transfer checks; its
-    /// `weight` is the removed Gaussians'.
+    /// Original render: RGB, and the alpha and depth (`HoleConfig::depth`) that color transfer
+    /// checks; its `weight` is the removed Gaussians'.
     pub before: Rendered,
     /// Render right after deleting the Gaussians (the input of completion); its `weight` is the
     /// kept objects' (in the hole and around it; zero where the deletion changed nothing).
