@@ -42,13 +42,6 @@ pub enum RenderedDepth {
     Median,
 }
 
-impl RenderedDepth {
-    /// Whether stage 2 must render the median depth too.
-    pub fn needs_median(self) -> bool {
-        self != RenderedDepth::Expected
-    }
-}
-
 /// What the report says of the choice (`rendered_depth` in report.json).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct DepthChoice {
@@ -104,8 +97,8 @@ pub(super) fn stage_in_chosen_depth<'a>(
     clock: &mut StageClock,
     progress: Progress,
 ) -> Result<(Staged<'a>, DepthChoice)> {
-    let StageInputs { photos, opts, completer, .. } = *inputs;
-    let photo_depth = opts.stages.complete && !photos.is_empty() && completer.photo_depth;
+    let opts = inputs.opts;
+    let photo_depth = opts.stages.complete && inputs.photo_depth_runs();
     let wanted = if opts.stages.complete { opts.rendered_depth } else { RenderedDepth::Expected };
     let both = wanted == RenderedDepth::Auto && photo_depth;
     let mut median_masks = None;
@@ -185,6 +178,13 @@ pub(super) struct StageInputs<'a> {
     pub photos: &'a [Vec<f32>],
     pub opts: &'a RemoveOptions,
     pub completer: &'a Completer,
+}
+
+impl StageInputs<'_> {
+    /// Whether stage 3b runs after completion: it needs the photos and the completer's photo depth.
+    fn photo_depth_runs(&self) -> bool {
+        !self.photos.is_empty() && self.completer.photo_depth
+    }
 }
 
 /// The edited views after stage 3b, the selection the hull grew and the Gaussians it took.
@@ -276,7 +276,7 @@ fn stage_views<'a>(
         // 3. completion, 3b. the hole depth the captured photos agree on
         complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
         clock.lap("complete");
-        if !photos.is_empty() && completer.photo_depth {
+        if inputs.photo_depth_runs() {
             correct_depths(&mut views, cameras, completer, progress);
             clock.lap("photo_depth");
         }

@@ -167,12 +167,14 @@ impl MaskedView {
     /// Of a view drawn with `DepthPlanes::Both`, the same view reading the median depth; this one
     /// keeps the expected depth alone.
     pub fn take_median_twin(&mut self) -> MaskedView {
-        let mut twin = self.clone();
-        for (r, t) in [(&mut self.before, &mut twin.before), (&mut self.after_removal, &mut twin.after_removal)] {
+        let take = |r: &mut Rendered| {
             assert_eq!(r.median.len(), r.depth.len(), "the median depth was not rendered");
-            t.depth = std::mem::take(&mut r.median);
-            t.median = Vec::new();
-        }
+            std::mem::take(&mut r.median)
+        };
+        // moved out before the clone, so that it copies no median plane
+        let (before, after_removal) = (take(&mut self.before), take(&mut self.after_removal));
+        let mut twin = self.clone();
+        (twin.before.depth, twin.after_removal.depth) = (before, after_removal);
         twin
     }
 
