@@ -165,18 +165,44 @@ fn deviation_from_others(views: &[ConsensusView], values: &[&[f32]], vi: usize, 
 mod tests {
     use super::*;
 
-    /// Three fronto-parallel views of the plane z = 3, each inventing the same square of it. a and b
-    /// invent one checkerboard fixed to the plane (they agree point by point); c invents a
+    /// Three fronto-parallel 40 x 40 views of the plane z = 3 (a at x = 0, b at 0.1, c at -0.1),
+    /// each inventing the same 20 x 20 square of its pixels.
+    fn three_views_of_a_plane() -> ([Camera; 3], Vec<bool>, Vec<f32>) {
+        let cam =
+            |name: &str, x: f64| Camera::look_at(name, 40, 40, 60.0, [x, 0.0, 0.0], [x, 0.0, 3.0], [0.0, -1.0, 0.0]);
+        let square = (0..1600).map(|i| (10..30).contains(&(i % 40)) && (10..30).contains(&(i / 40))).collect();
+        ([cam("a", 0.0), cam("b", 0.1), cam("c", -0.1)], square, vec![3.0f32; 1600])
+    }
+
+    /// The consensus of `images` (planar RGB of 40 x 40) inventing `square` at `depth`, each view
+    /// owning `owned[i]`.
+    fn consensus_of(
+        cams: &[Camera; 3],
+        images: &[Vec<f32>; 3],
+        square: &[bool],
+        depth: &[f32],
+        owned: [&[bool]; 3],
+    ) -> (Vec<Vec<f32>>, Vec<ViewConsensus>) {
+        let views: Vec<ConsensusView> = (0..3)
+            .map(|i| ConsensusView {
+                camera: &cams[i],
+                rgb: &images[i],
+                depth,
+                invented: square.to_vec(),
+                owned: owned[i],
+            })
+            .collect();
+        let (masks, verdicts) = loss_masks(&views, 0.03);
+        println!("{verdicts:?}");
+        (masks, verdicts)
+    }
+
+    /// a and b invent one checkerboard fixed to the plane (they agree point by point); c invents a
     /// checkerboard of its own pixel grid with another period, and owns only the left half of its
     /// square. c disagrees and keeps only what it owns; a and b keep everything.
     #[test]
     fn a_view_whose_invention_disagrees_keeps_only_what_it_owns() {
-        let cam =
-            |name: &str, x: f64| Camera::look_at(name, 40, 40, 60.0, [x, 0.0, 0.0], [x, 0.0, 3.0], [0.0, -1.0, 0.0]);
-        let cams = [cam("a", 0.0), cam("b", 0.1), cam("c", -0.1)];
-        let square: Vec<bool> =
-            (0..1600).map(|i| (10..30).contains(&(i % 40)) && (10..30).contains(&(i / 40))).collect();
-        let depth = vec![3.0f32; 1600];
+        let (cams, square, depth) = three_views_of_a_plane();
         let image = |camera: &Camera, on_plane: bool| -> Vec<f32> {
             let value = |i: usize| {
                 let (x, y) = (i % 40, i / 40);
@@ -198,18 +224,7 @@ mod tests {
         let images = [image(&cams[0], true), image(&cams[1], true), image(&cams[2], false)];
         let all = vec![true; 1600];
         let left: Vec<bool> = (0..1600).map(|i| i % 40 < 20).collect();
-        let owned = [&all, &all, &left];
-        let views: Vec<ConsensusView> = (0..3)
-            .map(|i| ConsensusView {
-                camera: &cams[i],
-                rgb: &images[i],
-                depth: &depth,
-                invented: square.clone(),
-                owned: owned[i],
-            })
-            .collect();
-        let (masks, verdicts) = loss_masks(&views, 0.03);
-        println!("{verdicts:?}");
+        let (masks, verdicts) = consensus_of(&cams, &images, &square, &depth, [&all, &all, &left]);
         for v in &verdicts[..2] {
             assert!(v.deviation.unwrap() < 0.1 && !v.left_out, "a and b agree: {v:?}");
         }
@@ -221,19 +236,14 @@ mod tests {
         }
     }
 
-    /// The same three views, inventing a tone ramp fixed to the plane (0.2 to 0.8 across the
-    /// square) with a fine grain on it of +-0.05: a and b the grain of the plane (cells of 0.15),
-    /// c a grain of its own pixel grid. By colors c deviates from the others by about 0.05 of its
-    /// variance, which the shared ramp fills, and would keep its grain; by detail by about twice
-    /// its grain's variance, and it is left to what it owns.
+    /// The three invent a tone ramp fixed to the plane (0.2 to 0.8 across the square) with a fine
+    /// grain on it of +-0.05: a and b the grain of the plane (cells of 0.15), c a grain of its own
+    /// pixel grid. By colors c deviates from the others by about 0.05 of its variance, which the
+    /// shared ramp fills, and would keep its grain; by detail by about twice its grain's variance,
+    /// and it is left to what it owns.
     #[test]
     fn a_view_sharing_the_tone_but_not_the_texture_is_left_out_by_its_detail() {
-        let cam =
-            |name: &str, x: f64| Camera::look_at(name, 40, 40, 60.0, [x, 0.0, 0.0], [x, 0.0, 3.0], [0.0, -1.0, 0.0]);
-        let cams = [cam("a", 0.0), cam("b", 0.1), cam("c", -0.1)];
-        let square: Vec<bool> =
-            (0..1600).map(|i| (10..30).contains(&(i % 40)) && (10..30).contains(&(i / 40))).collect();
-        let depth = vec![3.0f32; 1600];
+        let (cams, square, depth) = three_views_of_a_plane();
         let image = |camera: &Camera, own_grain: bool| -> Vec<f32> {
             let value = |i: usize| {
                 let (x, y) = (i % 40, i / 40);
@@ -247,17 +257,7 @@ mod tests {
         };
         let images = [image(&cams[0], false), image(&cams[1], false), image(&cams[2], true)];
         let all = vec![true; 1600];
-        let views: Vec<ConsensusView> = (0..3)
-            .map(|i| ConsensusView {
-                camera: &cams[i],
-                rgb: &images[i],
-                depth: &depth,
-                invented: square.clone(),
-                owned: &all,
-            })
-            .collect();
-        let (_, verdicts) = loss_masks(&views, 0.03);
-        println!("{verdicts:?}");
+        let (_, verdicts) = consensus_of(&cams, &images, &square, &depth, [&all, &all, &all]);
         for v in &verdicts[..2] {
             assert!(v.deviation.unwrap() < 0.05 && v.detail_deviation.unwrap() < 0.2 && !v.left_out, "a, b: {v:?}");
         }
