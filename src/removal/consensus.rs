@@ -117,9 +117,9 @@ fn detail(v: &ConsensusView) -> Vec<f32> {
 /// the other views' median at the surface points it shares, over the variance of its own.
 fn deviation_from_others(views: &[ConsensusView], values: &[&[f32]], vi: usize, tolerance: f32) -> Option<f64> {
     let v = &views[vi];
-    let rgb = values[vi];
+    let own = values[vi];
     let (w, hw) = (v.camera.width as usize, v.invented.len());
-    let color = |p: usize| [0, 1, 2].map(|c| rgb[c * hw + p]);
+    let value = |p: usize| [0, 1, 2].map(|c| own[c * hw + p]);
     let (mut deviation, mut shared) = (0.0f64, 0usize);
     let mut others: Vec<[f32; 3]> = Vec::with_capacity(views.len());
     for p in (0..hw).filter(|&p| v.invented[p] && v.depth[p] > 0.0 && v.depth[p].is_finite()) {
@@ -135,7 +135,7 @@ fn deviation_from_others(views: &[ConsensusView], values: &[&[f32]], vi: usize, 
         if others.len() < MIN_OTHERS {
             continue;
         }
-        let mine = color(p);
+        let mine = value(p);
         others.push(mine);
         for (c, &m) in mine.iter().enumerate() {
             let mut channel: Vec<f32> = others.iter().map(|o| o[c]).collect();
@@ -149,7 +149,7 @@ fn deviation_from_others(views: &[ConsensusView], values: &[&[f32]], vi: usize, 
     let invented: Vec<usize> = (0..hw).filter(|&p| v.invented[p]).collect();
     let variance: f64 = (0..3)
         .map(|c| {
-            let values = invented.iter().map(|&p| rgb[c * hw + p] as f64);
+            let values = invented.iter().map(|&p| own[c * hw + p] as f64);
             let mean = values.clone().sum::<f64>() / invented.len().max(1) as f64;
             values.map(|x| (x - mean).powi(2)).sum::<f64>() / invented.len().max(1) as f64
         })
