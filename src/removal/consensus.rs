@@ -65,8 +65,7 @@ pub fn loss_masks(views: &[ConsensusView], tolerance: f32) -> (Vec<Vec<f32>>, Ve
     // the views are independent
     let mut verdicts = vec![ViewConsensus { deviation: None, detail_deviation: None, left_out: false }; views.len()];
     crate::parallel::for_each_item(&mut verdicts, &mut |_, _| {}, |i, verdict| {
-        let deviation = deviation_from_others(views, &colors, i, tolerance);
-        let detail_deviation = deviation_from_others(views, &details, i, tolerance);
+        let [deviation, detail_deviation] = deviations_from_others(views, [&colors, &details], i, tolerance);
         let left_out = [deviation, detail_deviation].iter().any(|d| d.is_some_and(|d| d > LEAVE_OUT));
         *verdict = ViewConsensus { deviation, detail_deviation, left_out };
     });
@@ -82,12 +81,11 @@ pub fn loss_masks(views: &[ConsensusView], tolerance: f32) -> (Vec<Vec<f32>>, Ve
     (masks, verdicts)
 }
 
-/// `o`'s `values` (its colors or their detail) where it invented the surface point `world`, if it did.
-fn invention_at(o: &ConsensusView, values: &[f32], world: [f64; 3], tolerance: f32) -> Option<[f32; 3]> {
+/// `o`'s pixel where it invented the surface point `world`, if it did.
+fn invented_pixel(o: &ConsensusView, world: [f64; 3], tolerance: f32) -> Option<usize> {
     let (q, z) = o.camera.pixel_of(world)?;
-    let hw = o.invented.len();
     let d = o.depth[q] as f64;
-    (o.invented[q] && d > 0.0 && (z - d).abs() <= d * tolerance as f64).then(|| [0, 1, 2].map(|c| values[c * hw + q]))
+    (o.invented[q] && d > 0.0 && (z - d).abs() <= d * tolerance as f64).then_some(q)
 }
 
 /// Each invented pixel's color less the mean of the invented colors in its DETAIL_RADIUS window
@@ -113,15 +111,21 @@ fn detail(v: &ConsensusView) -> Vec<f32> {
         .collect()
 }
 
-/// View `vi`'s mean squared deviation of its `values` (per view: the colors or their detail) from
-/// the other views' median at the surface points it shares, over the variance of its own.
-fn deviation_from_others(views: &[ConsensusView], values: &[&[f32]], vi: usize, tolerance: f32) -> Option<f64> {
+/// View `vi`'s mean squared deviation of each of the `measures` (per view: the colors, or their
+/// detail; planar RGB) from the other views' median at the surface points it shares, over the
+/// variance of its own. The points and the other views' pixels are found once for all measures.
+fn deviations_from_others<const N: usize>(
+    views: &[ConsensusView],
+    measures: [&[&[f32]]; N],
+    vi: usize,
+    tolerance: f32,
+) -> [Option<f64>; N] {
     let v = &views[vi];
-    let own = values[vi];
     let (w, hw) = (v.camera.width as usize, v.invented.len());
-    let value = |p: usize| [0, 1, 2].map(|c| own[c * hw + p]);
-    let (mut deviation, mut shared) = (0.0f64, 0usize);
-    let mut others: Vec<[f32; 3]> = Vec::with_capacity(views.len());
+    let (mut deviation, mut shared) = ([0.0f64; N], 0usize);
+    // the other views that invented the point, and their pixel there
+    let mut others: Vec<(usize, usize)> = Vec::with_capacity(views.len());
+    let mut channel: Vec<f32> = Vec::with_capacity(views.len());
     for p in (0..hw).filter(|&p| v.invented[p] && v.depth[p] > 0.0 && v.depth[p].is_finite()) {
         let world = v.camera.pixel_point(p % w, p / w, v.depth[p] as f64);
         others.clear();
@@ -130,35 +134,38 @@ fn deviation_from_others(views: &[ConsensusView], values: &[&[f32]], vi: usize, 
                 .iter()
                 .enumerate()
                 .filter(|&(j, _)| j != vi)
-                .filter_map(|(j, o)| invention_at(o, values[j], world, tolerance)),
+                .filter_map(|(j, o)| invented_pixel(o, world, tolerance).map(|q| (j, q))),
         );
         if others.len() < MIN_OTHERS {
             continue;
         }
-        let mine = value(p);
-        others.push(mine);
-        for (c, &m) in mine.iter().enumerate() {
-            let mut channel: Vec<f32> = others.iter().map(|o| o[c]).collect();
-            let mid = channel.len() / 2;
-            let median = *channel.select_nth_unstable_by(mid, f32::total_cmp).1;
-            deviation += ((m - median) as f64).powi(2);
+        for (values, deviation) in measures.iter().zip(&mut deviation) {
+            for c in 0..3 {
+                let mine = values[vi][c * hw + p];
+                channel.clear();
+                channel.extend(others.iter().map(|&(j, q)| values[j][c * views[j].invented.len() + q]));
+                channel.push(mine);
+                let mid = channel.len() / 2;
+                let median = *channel.select_nth_unstable_by(mid, f32::total_cmp).1;
+                *deviation += ((mine - median) as f64).powi(2);
+            }
         }
         shared += 1;
     }
-    // the variance of the view's own invented values, summed over the channels
     let invented: Vec<usize> = (0..hw).filter(|&p| v.invented[p]).collect();
-    let variance: f64 = (0..3)
-        .map(|c| {
-            let values = invented.iter().map(|&p| own[c * hw + p] as f64);
-            let mean = values.clone().sum::<f64>() / invented.len().max(1) as f64;
-            values.map(|x| (x - mean).powi(2)).sum::<f64>() / invented.len().max(1) as f64
-        })
-        .sum();
-    if shared == 0 {
-        return None;
-    }
-    // a smooth invention that agrees stays; 1e-4 is a color step of about 0.006
-    Some(deviation / shared as f64 / (variance + 1e-4))
+    std::array::from_fn(|m| {
+        // the variance of the view's own invented values, summed over the channels
+        let own = measures[m][vi];
+        let variance: f64 = (0..3)
+            .map(|c| {
+                let values = invented.iter().map(|&p| own[c * hw + p] as f64);
+                let mean = values.clone().sum::<f64>() / invented.len().max(1) as f64;
+                values.map(|x| (x - mean).powi(2)).sum::<f64>() / invented.len().max(1) as f64
+            })
+            .sum();
+        // a smooth invention that agrees stays; 1e-4 is a color step of about 0.006
+        (shared > 0).then(|| deviation[m] / shared as f64 / (variance + 1e-4))
+    })
 }
 
 #[cfg(test)]
