@@ -9,7 +9,7 @@
 mod common;
 
 use cogeo::removal::complete::exemplar::ExemplarFill;
-use cogeo::removal::complete::surfaces::fill_by_surface;
+use cogeo::removal::complete::surfaces::{fill_by_surface, Boundary};
 
 const W: usize = 96;
 const H: usize = 72;
@@ -89,7 +89,7 @@ fn exemplar_fill_continues_bricks_and_checkerboard_into_the_hole() {
     let again = ex.fill(&input, &hole, &labels, W, H).unwrap();
     assert_eq!(filled, again, "the exemplar fill is deterministic");
     assert_outside_unchanged(&filled, &input, &hole);
-    let harmonic = fill_by_surface(&input, &hole, &labels, W, H, 3);
+    let harmonic = fill_by_surface(&input, &hole, &labels, W, H, 3, Boundary::TypicalColors);
     let (pe, ph) = (masked_psnr(&filled, &truth, &hole), masked_psnr(&harmonic, &truth, &hole));
     // without surface labels texture may cross the boundary
     let unguided = ex.fill(&input, &hole, &vec![0; W * H], W, H).unwrap();
@@ -202,7 +202,7 @@ fn rectified_and_in_image(hole: &[bool], dump: &str) -> (f64, f64, f64) {
     let rectified = ex.fill_rectified(&input, hole, &none, &labels, None, &[plane], &k, W, H).unwrap().rgb;
     let in_image = ex.fill(&input, hole, &labels, W, H).unwrap();
     assert_outside_unchanged(&rectified, &input, hole);
-    let harmonic = fill_by_surface(&input, hole, &labels, W, H, 3);
+    let harmonic = fill_by_surface(&input, hole, &labels, W, H, 3, Boundary::TypicalColors);
     if let Ok(dir) = std::env::var("COGEO_EXEMPLAR_DUMP") {
         let refs: Vec<&[f32]> =
             [&input, &harmonic, &in_image, &rectified, &truth].iter().map(|v| v.as_slice()).collect();

@@ -19,7 +19,7 @@
 //! field is updated Jacobi-style.
 
 use super::rectify::{rectify, Intrinsics, PlaneFrame};
-use super::surfaces::{self, fill_by_surface};
+use super::surfaces::{self, fill_by_surface, Boundary};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
 use crate::image_ops::{bounding_box, crop};
 use crate::planes::Plane;
@@ -329,7 +329,16 @@ impl ExemplarFill {
         let coarsest = levels.last_mut().unwrap();
         // (avoided pixels are no boundary value either: the leftover's color would tint the hole)
         let unknown: Vec<bool> = coarsest.hole.iter().zip(&coarsest.avoid).map(|(&h, &a)| h || a).collect();
-        let smooth = fill_by_surface(&coarsest.image, &unknown, &coarsest.labels, coarsest.w, coarsest.h, 3);
+        // (every known pixel: it only starts the search, which then picks patches by similarity)
+        let smooth = fill_by_surface(
+            &coarsest.image,
+            &unknown,
+            &coarsest.labels,
+            coarsest.w,
+            coarsest.h,
+            3,
+            Boundary::EveryKnownPixel,
+        );
         let n = coarsest.w * coarsest.h;
         for i in (0..n).filter(|&i| coarsest.hole[i]) {
             for c in 0..3 {
@@ -373,7 +382,7 @@ impl ExemplarFill {
         }
         if !synthesized {
             // no fully known patch at any size (a hole filling its crop): the smooth fill
-            return Ok(fill_by_surface(image, fill, labels, w, h, 3));
+            return Ok(fill_by_surface(image, fill, labels, w, h, 3, Boundary::EveryKnownPixel));
         }
         let level0 = &levels[0];
         for k in (0..cw * ch).filter(|&k| level0.hole[k]) {

@@ -15,6 +15,7 @@
 //!   the view's size: their pixels are used exactly inside the hole, the render everywhere else.
 
 use super::harmonic::harmonic_fill;
+use super::surfaces::{fill_by_surface, Boundary};
 use crate::image_ops::{bounding_box, crop, resize_bilinear, Rect};
 use crate::onnx::{Model, Tensor};
 use anyhow::{bail, Result};
@@ -147,7 +148,8 @@ impl Inpainter {
         h: usize,
     ) -> Result<(Vec<f32>, Option<[bool; 256]>)> {
         match self {
-            Inpainter::Harmonic => Ok((super::surfaces::fill_by_surface(image, fill, labels, w, h, 3), None)),
+            // a membrane takes its values from the nearest boundary: stray colors are left out
+            Inpainter::Harmonic => Ok((fill_by_surface(image, fill, labels, w, h, 3, Boundary::TypicalColors), None)),
             Inpainter::Exemplar(e) => {
                 let filled = e.fill_rectified(image, fill, avoid, labels, Some(disparity), planes, k, w, h)?;
                 Ok((filled.rgb, Some(filled.repeats)))

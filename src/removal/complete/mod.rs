@@ -534,7 +534,9 @@ impl Completer {
         // cost more than the exemplar at 504x378), without the edges of an invented texture.
         let texture_pending = texture_later && matches!(self.inpainter, Inpainter::Exemplar(_));
         let rgb = match &self.inpainter {
-            Inpainter::Harmonic => surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3),
+            Inpainter::Harmonic => {
+                surfaces::fill_by_surface(v.rgb, &fill, &labels, w, h, 3, surfaces::Boundary::TypicalColors)
+            }
             Inpainter::Exemplar(_) if texture_pending => {
                 let known: Vec<bool> = fill.iter().map(|&f| !f).collect();
                 harmonic::harmonic_fill(v.rgb, &known, w, h, 3)

@@ -224,7 +224,7 @@ fn colors_do_not_cross_surfaces() {
         })
         .collect();
     assert!(labels.iter().all(|&l| l > 0));
-    let filled = fill_by_surface(&image, &hole, &labels, w, h, 3);
+    let filled = fill_by_surface(&image, &hole, &labels, w, h, 3, Boundary::EveryKnownPixel);
     for k in 0..3 * w * h {
         assert!(
             (filled[k] - image[k]).abs() < 1e-5,
@@ -238,4 +238,46 @@ fn colors_do_not_cross_surfaces() {
     // a plain harmonic fill mixes them
     let plain = harmonic_fill(&image, &known, w, h, 3);
     assert!((0..3 * w * h).any(|k| (plain[k] - image[k]).abs() > 0.05));
+}
+
+/// A surface whose colors are an affine ramp (which a membrane reproduces exactly) with a few
+/// stray white pixels beside the hole, as the pedestal's rim took the lawn's label on the statue:
+/// with the typical colors as boundary the fill is the ramp to float precision; with every known
+/// pixel the strays pull part of the hole toward white. A two-tone texture (a checkerboard, half
+/// of its pixels far from the median) keeps all its pixels.
+#[test]
+fn a_few_stray_colors_do_not_tint_the_membrane() {
+    let (w, h) = (48, 40);
+    let n = w * h;
+    let hole: Vec<bool> = (0..n).map(|p| (16..32).contains(&(p % w)) && (12..28).contains(&(p / w))).collect();
+    let labels = vec![1u8; n];
+    let ramp = |p: usize, c: usize| 0.3 + 0.004 * (p % w) as f32 + 0.003 * (p / w) as f32 + 0.05 * c as f32;
+    let mut image: Vec<f32> = (0..3 * n).map(|k| ramp(k % n, k / n)).collect();
+    // twelve stray pixels along the hole's left edge, in its lower half
+    let strays: Vec<usize> = (16..28).map(|y| y * w + 15).collect();
+    for &p in &strays {
+        for c in 0..3 {
+            image[c * n + p] = 1.0;
+        }
+    }
+    let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+    let kept = typical_colors(&image, &known, n, 3);
+    for p in 0..n {
+        assert_eq!(kept[p], known[p] && !strays.contains(&p), "pixel ({}, {})", p % w, p / w);
+    }
+    let typical = fill_by_surface(&image, &hole, &labels, w, h, 3, Boundary::TypicalColors);
+    let every = fill_by_surface(&image, &hole, &labels, w, h, 3, Boundary::EveryKnownPixel);
+    let mut worst_every = 0.0f32;
+    for p in (0..n).filter(|&p| hole[p]) {
+        for c in 0..3 {
+            let want = ramp(p, c);
+            let got = typical[c * n + p];
+            assert!((got - want).abs() < 1e-4, "pixel ({}, {}) channel {c}: {got} against {want}", p % w, p / w);
+            worst_every = worst_every.max(every[c * n + p] - want);
+        }
+    }
+    assert!(worst_every > 0.2, "the strays should tint the plain membrane (by {worst_every})");
+    // a checkerboard: every pixel lies 0 or 0.8 from a median that is one of its two tones
+    let checker: Vec<f32> = (0..3 * n).map(|k| 0.1 + 0.8 * (((k % n) % w / 4 + (k % n) / w / 4) % 2) as f32).collect();
+    assert_eq!(typical_colors(&checker, &known, n, 3), known);
 }
