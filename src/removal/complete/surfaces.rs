@@ -532,6 +532,7 @@ pub fn fill_by_surface(
     let win = fill_window(b, w, h);
     let (cw, ch) = (win.width(), win.height());
     let at = |x: usize, y: usize| (win.y0 + y) * w + win.x0 + x;
+    let window = crop(image, w, h, channels, win);
     let surfaces = labels.iter().copied().max().unwrap_or(0);
     for s in 1..=surfaces {
         let targets = (0..cw * ch).filter(|&k| fill[at(k % cw, k / cw)] && labels[at(k % cw, k / cw)] == s).count();
@@ -540,7 +541,6 @@ pub fn fill_by_surface(
         if targets == 0 || !known_s.iter().any(|&k| k) {
             continue;
         }
-        let window = crop(image, w, h, channels, win);
         let known_s = match boundary {
             Boundary::EveryKnownPixel => known_s,
             Boundary::TypicalColors => typical_colors(&window, &known_s, cw * ch, channels),
