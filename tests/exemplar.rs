@@ -3,8 +3,9 @@
 //! Texture must continue into the hole with its period, each surface from itself, far better than
 //! the smooth harmonic fill; pixels outside the hole are untouched and runs are deterministic. A
 //! floor seen in perspective (exact ground truth from ray casting) must continue in phase when
-//! synthesized in the plane's rectified frame. The completed depth keeps a far background out of
-//! a near surface's fill even where no plane was found.
+//! synthesized in the plane's rectified frame, and a path across a receding lawn must run straight
+//! through a wide hole. The completed depth keeps a far background out of a near surface's fill
+//! even where no plane was found.
 
 mod common;
 
@@ -290,4 +291,97 @@ fn completed_depth_keeps_a_far_smooth_background_out_of_a_near_textured_fill() {
         "without depth the fill has {:.2} of the lawn's variance: the test shows nothing",
         u / lawn
     );
+}
+
+/// The receding floor of `receding_checkerboard`, now a grainy lawn (a color per 0.05 x 0.05 cell
+/// of the floor) with a grey path across it (floor depth 2.3 to 2.9, image rows 55 to 64): the
+/// plane, intrinsics, exact image (4 x 4 rays per pixel), labels (1 on the floor) and, per pixel,
+/// whether all its rays hit the path (Some(true)), the lawn (Some(false)) or both (None).
+#[allow(clippy::type_complexity)]
+fn path_across_a_lawn(
+) -> (cogeo::planes::Plane, cogeo::removal::complete::rectify::Intrinsics, Vec<f32>, Vec<u8>, Vec<Option<bool>>) {
+    use cogeo::planes::Plane;
+    use cogeo::removal::complete::rectify::Intrinsics;
+    let k = Intrinsics { fx: 80.0, fy: 80.0, cx: 48.0, cy: 36.0 };
+    let q = [0.0, 0.8, 0.15];
+    let plane = Plane { a: q[0] / k.fx, b: q[1] / k.fy, c: q[2] - q[0] * k.cx / k.fx - q[1] * k.cy / k.fy };
+    let grain = |cx: i64, cz: i64, c: usize| {
+        let mut x = (cx as u64).wrapping_mul(0x9e3779b97f4a7c15) ^ (cz as u64).wrapping_mul(0xc2b2ae3d27d4eb4f);
+        x ^= (c as u64 + 1).wrapping_mul(0x165667b19e3779f9);
+        x ^= x >> 29;
+        x = x.wrapping_mul(0xbf58476d1ce4e5b9);
+        x ^= x >> 32;
+        (x % 1000) as f64 / 1000.0 - 0.5
+    };
+    let (mut truth, mut labels, mut on_path) = (vec![0f32; 3 * W * H], vec![0u8; W * H], vec![None; W * H]);
+    for i in 0..W * H {
+        let (px, py) = ((i % W) as f64, (i / W) as f64);
+        let (mut rgb, mut floor, mut path) = ([0f64; 3], 0, 0);
+        for s in 0..16 {
+            let (x, y) = (px + (s % 4) as f64 / 4.0 + 0.125, py + (s / 4) as f64 / 4.0 + 0.125);
+            let ray = [(x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0];
+            let d = q[0] * ray[0] + q[1] * ray[1] + q[2] * ray[2];
+            let c = if d > 0.0 {
+                floor += 1;
+                let (fx, fz) = (ray[0] / d, ray[2] / d);
+                let (cx, cz) = ((fx / 0.05).floor() as i64, (fz / 0.05).floor() as i64);
+                if (2.3..2.9).contains(&fz) {
+                    path += 1;
+                    [0.55 + 0.1 * grain(cx, cz, 0), 0.55 + 0.1 * grain(cx, cz, 0), 0.52 + 0.1 * grain(cx, cz, 0)]
+                } else {
+                    [0.3 + 0.2 * grain(cx, cz, 0), 0.45 + 0.2 * grain(cx, cz, 1), 0.15 + 0.1 * grain(cx, cz, 2)]
+                }
+            } else {
+                [0.6, 0.75, 0.95]
+            };
+            for ch in 0..3 {
+                rgb[ch] += c[ch] / 16.0;
+            }
+        }
+        labels[i] = (floor == 16) as u8;
+        on_path[i] = match path {
+            16 => Some(true),
+            0 => Some(false),
+            _ => None,
+        };
+        for ch in 0..3 {
+            truth[ch * W * H + i] = rgb[ch] as f32;
+        }
+    }
+    (plane, k, truth, labels, on_path)
+}
+
+#[test]
+fn rectified_fill_continues_a_path_straight_through_the_hole() {
+    // a hole across the path, three times as wide as the path: patch by patch the lawn matches
+    // the smooth first estimate about as well as the path does, and the path stopped near the
+    // hole's edges with lawn between (0.096 of its hole pixels looked like the path); continued
+    // first as a region of its own (regions.rs), the path runs through (1.000)
+    let gpu = common::gpu();
+    let (plane, k, truth, labels, on_path) = path_across_a_lawn();
+    let hole: Vec<bool> = (0..W * H).map(|i| (20..76).contains(&(i % W)) && (44..70).contains(&(i / W))).collect();
+    let input = punched(&truth, &hole);
+    let ex = ExemplarFill::new(&gpu, 7).unwrap();
+    let none = vec![false; W * H];
+    let filled = ex.fill_rectified(&input, &hole, &none, &labels, None, &[plane], &k, W, H).unwrap().rgb;
+    assert_outside_unchanged(&filled, &input, &hole);
+    // each hole pixel wholly on the path or the lawn: is its fill nearer the path's mean color or
+    // the lawn's (the truth's means outside the hole)?
+    let mean_of = |want: bool| {
+        let px: Vec<usize> = (0..W * H).filter(|&i| !hole[i] && labels[i] == 1 && on_path[i] == Some(want)).collect();
+        [0, 1, 2].map(|c| px.iter().map(|&i| truth[c * W * H + i] as f64).sum::<f64>() / px.len() as f64)
+    };
+    let (path, lawn) = (mean_of(true), mean_of(false));
+    let nearer_path = |i: usize| {
+        let d = |m: &[f64; 3]| (0..3).map(|c| (filled[c * W * H + i] as f64 - m[c]).powi(2)).sum::<f64>();
+        d(&path) < d(&lawn)
+    };
+    let share = |want: bool| {
+        let px: Vec<usize> = (0..W * H).filter(|&i| hole[i] && on_path[i] == Some(want)).collect();
+        px.iter().filter(|&&i| nearer_path(i) == want).count() as f64 / px.len() as f64
+    };
+    let (on, off) = (share(true), share(false));
+    eprintln!("hole pixels filled as the truth is: on the path {on:.3}, on the lawn {off:.3}");
+    assert!(on > 0.9, "only {on:.3} of the path's hole pixels look like the path");
+    assert!(off > 0.95, "only {off:.3} of the lawn's hole pixels look like the lawn");
 }

@@ -11,7 +11,9 @@
 //! floor the depth term prefers sources at the same distance (the same rows), where the texture
 //! has the target's period. The coarsest level starts from the surface-wise harmonic fill.
 //! `fill_rectified` goes further where the camera is known: each plane's pixels are synthesized
-//! in that plane's own frame (rectify.rs), where the texture has one period everywhere.
+//! in that plane's own frame (rectify.rs), where the texture has one period everywhere; what is
+//! left is synthesized in the image, each surface's regions (a path across a lawn) first continued
+//! straight through the hole and each filled from itself (regions.rs).
 //!
 //! The GPU passes are `exemplar_nnf.comp` (one PatchMatch pass: propagation, random search, a
 //! global jump) and `exemplar_vote.comp`; the pyramid and the hand-over between levels are host
@@ -19,6 +21,7 @@
 //! field is updated Jacobi-style.
 
 use super::rectify::{rectify, Intrinsics, PlaneFrame};
+use super::regions;
 use super::surfaces::{self, fill_by_surface, Boundary};
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, Recorder};
 use crate::image_ops::{bounding_box, crop};
@@ -283,7 +286,9 @@ impl ExemplarFill {
             }
         }
         if rest.iter().any(|&r| r) {
-            out = self.fill_avoiding(&out, &rest, avoid, labels, disparity, w, h)?;
+            // structure first here too: each surface's regions continued through what is left
+            let split = regions::split_surfaces(&out, &rest, avoid, labels, &repeats, w, h);
+            out = self.fill_avoiding(&out, &rest, avoid, &split, disparity, w, h)?;
         }
         Ok(RectifiedFill { rgb: out, repeats })
     }

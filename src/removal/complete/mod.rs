@@ -17,6 +17,8 @@
 //!   surface's colors on it.
 //! - `rectify`: a plane's pixels on a regular grid in the plane, where the exemplar copies
 //!   texture with its period under perspective.
+//! - `regions`: a surface's regions of different color continued straight through the hole
+//!   before the exemplar copies texture into each.
 //! - `leftover_depth`: the depth of the Gaussians left behind the objects, where the photos
 //!   agree on it better than on the completed one.
 //! - `photo_depth`: the hole depth's scale that makes the other views agree on its colors.
@@ -33,6 +35,7 @@ pub mod inpaint;
 pub mod leftover_depth;
 pub mod photo_depth;
 pub mod rectify;
+pub mod regions;
 pub mod source_views;
 pub mod surfaces;
 pub mod transfer;
