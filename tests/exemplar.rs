@@ -9,7 +9,9 @@
 
 mod common;
 
+use cogeo::planes::Plane;
 use cogeo::removal::complete::exemplar::ExemplarFill;
+use cogeo::removal::complete::rectify::Intrinsics;
 use cogeo::removal::complete::surfaces::{fill_by_surface, Boundary};
 
 const W: usize = 96;
@@ -150,33 +152,31 @@ fn exemplar_copies_no_texture_from_avoided_pixels() {
     assert!(without > 48, "the leftover is a source without `avoid` ({without} green pixels): the test shows nothing");
 }
 
-/// A camera looking down at a checkerboard floor, ray cast with 4x4 rays per pixel: the floor's
-/// plane, the intrinsics, the exact image and the labels (1 where all rays hit the floor).
-fn receding_checkerboard() -> (cogeo::planes::Plane, cogeo::removal::complete::rectify::Intrinsics, Vec<f32>, Vec<u8>) {
-    use cogeo::planes::Plane;
-    use cogeo::removal::complete::rectify::Intrinsics;
+/// A camera looking down at the floor q . X = 1 (horizon at row 21), ray cast with 4x4 rays per
+/// pixel: the floor's plane, the intrinsics, the exact image (each ray the color `floor_color`
+/// gives the floor point (x, z) it hits, the sky's elsewhere), and per pixel how many of its rays
+/// hit the floor and how many of them a `marked` floor point.
+#[allow(clippy::type_complexity)]
+fn ray_cast_floor(
+    floor_color: impl Fn(f64, f64) -> [f64; 3],
+    marked: impl Fn(f64, f64) -> bool,
+) -> (Plane, Intrinsics, Vec<f32>, Vec<u8>, Vec<u8>) {
     let k = Intrinsics { fx: 80.0, fy: 80.0, cx: 48.0, cy: 36.0 };
-    // the floor q . X = 1 in camera space (horizon at row 21); squares of 0.4 in (x, z)
     let q = [0.0, 0.8, 0.15];
     let plane = Plane { a: q[0] / k.fx, b: q[1] / k.fy, c: q[2] - q[0] * k.cx / k.fx - q[1] * k.cy / k.fy };
-    let mut truth = vec![0f32; 3 * W * H];
-    let mut labels = vec![0u8; W * H];
+    let (mut image, mut floor_rays, mut marked_rays) = (vec![0f32; 3 * W * H], vec![0u8; W * H], vec![0u8; W * H]);
     for i in 0..W * H {
         let (px, py) = ((i % W) as f64, (i / W) as f64);
         let mut rgb = [0f64; 3];
-        let mut floor = 0;
         for s in 0..16 {
             let (x, y) = (px + (s % 4) as f64 / 4.0 + 0.125, py + (s / 4) as f64 / 4.0 + 0.125);
             let ray = [(x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0];
             let d = q[0] * ray[0] + q[1] * ray[1] + q[2] * ray[2];
             let c = if d > 0.0 {
-                floor += 1;
                 let (fx, fz) = (ray[0] / d, ray[2] / d);
-                if ((fx / 0.4).floor() + (fz / 0.4).floor()) as i64 % 2 == 0 {
-                    [0.9, 0.88, 0.8]
-                } else {
-                    [0.2, 0.25, 0.45]
-                }
+                floor_rays[i] += 1;
+                marked_rays[i] += marked(fx, fz) as u8;
+                floor_color(fx, fz)
             } else {
                 [0.6, 0.75, 0.95]
             };
@@ -184,12 +184,25 @@ fn receding_checkerboard() -> (cogeo::planes::Plane, cogeo::removal::complete::r
                 rgb[ch] += c[ch] / 16.0;
             }
         }
-        labels[i] = (floor == 16) as u8;
         for ch in 0..3 {
-            truth[ch * W * H + i] = rgb[ch] as f32;
+            image[ch * W * H + i] = rgb[ch] as f32;
         }
     }
-    (plane, k, truth, labels)
+    (plane, k, image, floor_rays, marked_rays)
+}
+
+/// A checkerboard floor (squares of 0.4 in x and z) seen by `ray_cast_floor`: the floor's plane,
+/// the intrinsics, the exact image and the labels (1 where all rays hit the floor).
+fn receding_checkerboard() -> (Plane, Intrinsics, Vec<f32>, Vec<u8>) {
+    let checker = |fx: f64, fz: f64| {
+        if ((fx / 0.4).floor() + (fz / 0.4).floor()) as i64 % 2 == 0 {
+            [0.9, 0.88, 0.8]
+        } else {
+            [0.2, 0.25, 0.45]
+        }
+    };
+    let (plane, k, truth, floor, _) = ray_cast_floor(checker, |_, _| false);
+    (plane, k, truth, floor.iter().map(|&f| (f == 16) as u8).collect())
 }
 
 /// Fills `hole` of the receding checkerboard in the floor's rectified frame and in the image;
@@ -293,18 +306,12 @@ fn completed_depth_keeps_a_far_smooth_background_out_of_a_near_textured_fill() {
     );
 }
 
-/// The receding floor of `receding_checkerboard`, now a grainy lawn (a color per 0.05 x 0.05 cell
-/// of the floor) with a grey path across it (floor depth 2.3 to 2.9, image rows 55 to 64): the
-/// plane, intrinsics, exact image (4 x 4 rays per pixel), labels (1 on the floor) and, per pixel,
-/// whether all its rays hit the path (Some(true)), the lawn (Some(false)) or both (None).
+/// The floor of `ray_cast_floor` as a grainy lawn (a color per 0.05 x 0.05 cell of the floor) with
+/// a grey path across it (floor depth 2.3 to 2.9, image rows 55 to 64): the plane, intrinsics,
+/// exact image, labels (1 on the floor) and, per pixel, whether all its rays hit the path
+/// (Some(true)), the lawn (Some(false)) or both (None).
 #[allow(clippy::type_complexity)]
-fn path_across_a_lawn(
-) -> (cogeo::planes::Plane, cogeo::removal::complete::rectify::Intrinsics, Vec<f32>, Vec<u8>, Vec<Option<bool>>) {
-    use cogeo::planes::Plane;
-    use cogeo::removal::complete::rectify::Intrinsics;
-    let k = Intrinsics { fx: 80.0, fy: 80.0, cx: 48.0, cy: 36.0 };
-    let q = [0.0, 0.8, 0.15];
-    let plane = Plane { a: q[0] / k.fx, b: q[1] / k.fy, c: q[2] - q[0] * k.cx / k.fx - q[1] * k.cy / k.fy };
+fn path_across_a_lawn() -> (Plane, Intrinsics, Vec<f32>, Vec<u8>, Vec<Option<bool>>) {
     let grain = |cx: i64, cz: i64, c: usize| {
         let mut x = (cx as u64).wrapping_mul(0x9e3779b97f4a7c15) ^ (cz as u64).wrapping_mul(0xc2b2ae3d27d4eb4f);
         x ^= (c as u64 + 1).wrapping_mul(0x165667b19e3779f9);
@@ -313,41 +320,26 @@ fn path_across_a_lawn(
         x ^= x >> 32;
         (x % 1000) as f64 / 1000.0 - 0.5
     };
-    let (mut truth, mut labels, mut on_path) = (vec![0f32; 3 * W * H], vec![0u8; W * H], vec![None; W * H]);
-    for i in 0..W * H {
-        let (px, py) = ((i % W) as f64, (i / W) as f64);
-        let (mut rgb, mut floor, mut path) = ([0f64; 3], 0, 0);
-        for s in 0..16 {
-            let (x, y) = (px + (s % 4) as f64 / 4.0 + 0.125, py + (s / 4) as f64 / 4.0 + 0.125);
-            let ray = [(x - k.cx) / k.fx, (y - k.cy) / k.fy, 1.0];
-            let d = q[0] * ray[0] + q[1] * ray[1] + q[2] * ray[2];
-            let c = if d > 0.0 {
-                floor += 1;
-                let (fx, fz) = (ray[0] / d, ray[2] / d);
-                let (cx, cz) = ((fx / 0.05).floor() as i64, (fz / 0.05).floor() as i64);
-                if (2.3..2.9).contains(&fz) {
-                    path += 1;
-                    [0.55 + 0.1 * grain(cx, cz, 0), 0.55 + 0.1 * grain(cx, cz, 0), 0.52 + 0.1 * grain(cx, cz, 0)]
-                } else {
-                    [0.3 + 0.2 * grain(cx, cz, 0), 0.45 + 0.2 * grain(cx, cz, 1), 0.15 + 0.1 * grain(cx, cz, 2)]
-                }
-            } else {
-                [0.6, 0.75, 0.95]
-            };
-            for ch in 0..3 {
-                rgb[ch] += c[ch] / 16.0;
-            }
+    let on_path = |_: f64, fz: f64| (2.3..2.9).contains(&fz);
+    let color = |fx: f64, fz: f64| {
+        let (cx, cz) = ((fx / 0.05).floor() as i64, (fz / 0.05).floor() as i64);
+        if on_path(fx, fz) {
+            let g = 0.1 * grain(cx, cz, 0);
+            [0.55 + g, 0.55 + g, 0.52 + g]
+        } else {
+            [0.3 + 0.2 * grain(cx, cz, 0), 0.45 + 0.2 * grain(cx, cz, 1), 0.15 + 0.1 * grain(cx, cz, 2)]
         }
-        labels[i] = (floor == 16) as u8;
-        on_path[i] = match path {
+    };
+    let (plane, k, truth, floor, path) = ray_cast_floor(color, on_path);
+    let labels = floor.iter().map(|&f| (f == 16) as u8).collect();
+    let on_path = path
+        .iter()
+        .map(|&p| match p {
             16 => Some(true),
             0 => Some(false),
             _ => None,
-        };
-        for ch in 0..3 {
-            truth[ch * W * H + i] = rgb[ch] as f32;
-        }
-    }
+        })
+        .collect();
     (plane, k, truth, labels, on_path)
 }
 
