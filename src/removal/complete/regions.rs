@@ -85,12 +85,9 @@ pub fn continue_regions(image: &[f32], hole: &[bool], known: &[bool], w: usize, 
     let mut labels: Vec<u8> = (0..n).map(|p| if known[p] { region(p) } else { 0 }).collect();
     let direction = edge_direction(&labels, &band, w, h)?;
     let nearest = nearest_region(&labels, hole, w, h);
-    let continued: Vec<(usize, u8)> = (0..n)
-        .filter(|&p| hole[p])
-        .map(|p| (p, continue_along(&labels, hole, p, direction, w, h).unwrap_or(nearest[p])))
-        .collect();
-    for (p, r) in continued {
-        labels[p] = r;
+    let continued = continue_along(&labels, hole, direction, w, h);
+    for p in (0..n).filter(|&p| hole[p]) {
+        labels[p] = continued[p].unwrap_or(nearest[p]);
     }
     Some(labels)
 }
@@ -240,33 +237,56 @@ fn edge_direction(labels: &[u8], band: &[usize], w: usize, h: usize) -> Option<f
     (coherence >= MIN_COHERENCE).then_some(across + std::f64::consts::FRAC_PI_2)
 }
 
-/// The region of hole pixel `p` that the line through it along `direction` continues: the
-/// region both its ends land on, or the nearer end's where they differ; None where neither end
-/// lands on a region (off the surface or the image).
-fn continue_along(labels: &[u8], hole: &[bool], p: usize, direction: f64, w: usize, h: usize) -> Option<u8> {
-    let (x, y) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
+/// Per hole pixel, the region that the line through it along `direction` continues: the region
+/// both ends of the line (where it leaves the hole) land on, or the nearer end's where they
+/// differ; None where neither end lands on a region (off the surface or the image). One march
+/// per line, not per pixel: every hole pixel a march crosses takes that line's answer, so the
+/// pass costs about one visit per hole pixel however wide the hole (per pixel it was the hole's
+/// width times its area).
+fn continue_along(labels: &[u8], hole: &[bool], direction: f64, w: usize, h: usize) -> Vec<Option<u8>> {
     let (dx, dy) = (direction.cos(), direction.sin());
     // steps of at most one pixel along the larger axis: no pixel of the line is skipped
     let step = 1.0 / dx.abs().max(dy.abs());
-    let end = |sign: f64| {
-        let mut t = step;
-        loop {
-            let (px, py) = (x + sign * t * dx, y + sign * t * dy);
-            if px < 0.0 || py < 0.0 || px >= w as f64 || py >= h as f64 {
-                return None;
-            }
-            let q = py as usize * w + px as usize;
-            if !hole[q] {
-                return (labels[q] != 0).then_some((labels[q], t));
-            }
-            t += step;
+    let mut out: Vec<Option<u8>> = vec![None; w * h];
+    let mut done = vec![false; w * h];
+    let mut crossed: Vec<(usize, f64)> = Vec::new();
+    for p in (0..w * h).filter(|&p| hole[p]) {
+        if done[p] {
+            continue;
         }
-    };
-    match (end(1.0), end(-1.0)) {
-        (Some((a, ta)), Some((b, tb))) => Some(if a == b || ta <= tb { a } else { b }),
-        (Some((a, _)), None) | (None, Some((a, _))) => Some(a),
-        (None, None) => None,
+        let (x, y) = ((p % w) as f64 + 0.5, (p / w) as f64 + 0.5);
+        crossed.clear();
+        crossed.push((p, 0.0));
+        // the hole pixels the line crosses each way, and the region where it leaves the hole
+        let mut end = |sign: f64| {
+            let mut t = step;
+            loop {
+                let (px, py) = (x + sign * t * dx, y + sign * t * dy);
+                if px < 0.0 || py < 0.0 || px >= w as f64 || py >= h as f64 {
+                    return None;
+                }
+                let q = py as usize * w + px as usize;
+                if !hole[q] {
+                    return (labels[q] != 0).then_some((labels[q], sign * t));
+                }
+                crossed.push((q, sign * t));
+                t += step;
+            }
+        };
+        let (ahead, behind) = (end(1.0), end(-1.0));
+        for &(q, t) in &crossed {
+            if done[q] {
+                continue;
+            }
+            done[q] = true;
+            out[q] = match (ahead, behind) {
+                (Some((a, ta)), Some((b, tb))) => Some(if a == b || ta - t <= t - tb { a } else { b }),
+                (Some((a, _)), None) | (None, Some((a, _))) => Some(a),
+                (None, None) => None,
+            };
+        }
     }
+    out
 }
 
 /// Per hole pixel, the region of the nearest labelled pixel (4-connected steps through the hole;
