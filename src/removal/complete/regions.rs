@@ -24,8 +24,8 @@
 //! few short ones along it.) Hole pixels whose line leaves the surface both ways take the region
 //! nearest to them.
 //!
-//! A CPU pass over each surface's pixels, beside the GPU synthesis (0.5 s of the statue
-//! `images_2` removal's 25 views, 33 ms at most for one view); textures that repeat (a
+//! A CPU pass over each surface's pixels, beside the GPU synthesis (0.5-0.7 s of the statue
+//! `images_2` removal's 25 views, 33-42 ms at most for one view); textures that repeat (a
 //! checkerboard, `exemplar::RectifiedFill::repeats`) are continued in phase by the rectified
 //! synthesis and are left whole. On the benchmarks no path crosses a hole, and the step changes
 //! nothing measurable there (none of the synth rooms' surfaces splits; on the real-photo scenes
