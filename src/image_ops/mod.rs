@@ -234,6 +234,16 @@ pub fn box_count(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<u32> {
     out
 }
 
+/// The mean of the `mask` pixels of `img` (`channels` planes of `w` x `h`) in the (2r+1)^2 window
+/// around each `mask` pixel (normalized convolution: `box_sum` of the masked image over
+/// `box_count` of the mask); 0 off the mask.
+pub fn masked_box_mean(img: &[f32], mask: &[bool], w: usize, h: usize, channels: usize, r: usize) -> Vec<f32> {
+    let n = w * h;
+    let masked: Vec<f32> = (0..channels * n).map(|i| if mask[i % n] { img[i] } else { 0.0 }).collect();
+    let (sums, counts) = (box_sum(&masked, w, h, channels, r), box_count(mask, w, h, r));
+    (0..channels * n).map(|i| if mask[i % n] { sums[i] / counts[i % n] as f32 } else { 0.0 }).collect()
+}
+
 /// Maxima of `img` (`channels` planes of `w` x `h`) over the (2r+1)^2 window around each pixel,
 /// the window cut at the borders; `f32::NEG_INFINITY` marks a missing value (and is the result
 /// where the window holds none). Minima: negate in and out. Linear in the pixels whatever `r`.

@@ -21,7 +21,7 @@
 //!   scored 0.45-0.48, kept their whole invention and blurred the patch (bench/JOURNAL.md,
 //!   2026-12-02, 06:24).
 
-use crate::image_ops::{box_count, box_sum};
+use crate::image_ops::masked_box_mean;
 use crate::scene::Camera;
 
 /// Deviation from the consensus, as a share of the view's own variance (of its colors, or of
@@ -93,22 +93,8 @@ fn invented_pixel(o: &ConsensusView, world: [f64; 3], tolerance: f32) -> Option<
 fn detail(v: &ConsensusView) -> Vec<f32> {
     let (w, hw) = (v.camera.width as usize, v.invented.len());
     let h = hw / w;
-    let invented: Vec<f32> = (0..3)
-        .flat_map(|c| (0..hw).map(move |p| (c, p)))
-        .map(|(c, p)| if v.invented[p] { v.rgb[c * hw + p] } else { 0.0 })
-        .collect();
-    let sums = box_sum(&invented, w, h, 3, DETAIL_RADIUS);
-    let counts = box_count(&v.invented, w, h, DETAIL_RADIUS);
-    (0..3 * hw)
-        .map(|i| {
-            let p = i % hw;
-            if v.invented[p] {
-                invented[i] - sums[i] / counts[p] as f32
-            } else {
-                0.0
-            }
-        })
-        .collect()
+    let means = masked_box_mean(v.rgb, &v.invented, w, h, 3, DETAIL_RADIUS);
+    (0..3 * hw).map(|i| if v.invented[i % hw] { v.rgb[i] - means[i] } else { 0.0 }).collect()
 }
 
 /// View `vi`'s mean squared deviation of each of the `measures` (per view: the colors, or their

@@ -36,7 +36,7 @@
 //! pixels around the hole hold three colors (hedge, lawn, path), which two regions do not
 //! separate.
 
-use crate::image_ops::{box_count, box_sum, distance_within};
+use crate::image_ops::{distance_within, masked_box_mean};
 use std::collections::VecDeque;
 
 /// Half the window the colors are smoothed over before the split, in pixels.
@@ -67,7 +67,8 @@ const ITERATIONS: usize = 10;
 /// split in two (module comment).
 pub fn continue_regions(image: &[f32], hole: &[bool], known: &[bool], w: usize, h: usize) -> Option<Vec<u8>> {
     let n = w * h;
-    let smooth = smoothed(image, known, w, h);
+    // each known pixel's color, the mean of the known pixels in its window
+    let smooth = masked_box_mean(image, known, w, h, 3, SMOOTH_RADIUS);
     let near = distance_within(hole, w, h, BAND);
     let band: Vec<usize> = (0..n).filter(|&p| known[p] && near[p] <= BAND).collect();
     if band.len() < MIN_BAND_PIXELS || !hole.iter().any(|&m| m) {
@@ -129,15 +130,6 @@ pub fn split_surfaces(
         next += 2;
     }
     out
-}
-
-/// Each known pixel's color, the mean of the known pixels in its (2 SMOOTH_RADIUS + 1)^2 window
-/// (planar RGB; 0 elsewhere).
-fn smoothed(image: &[f32], known: &[bool], w: usize, h: usize) -> Vec<f32> {
-    let n = w * h;
-    let masked: Vec<f32> = (0..3 * n).map(|i| if known[i % n] { image[i] } else { 0.0 }).collect();
-    let (sums, counts) = (box_sum(&masked, w, h, 3, SMOOTH_RADIUS), box_count(known, w, h, SMOOTH_RADIUS));
-    (0..3 * n).map(|i| if known[i % n] { sums[i] / counts[i % n] as f32 } else { 0.0 }).collect()
 }
 
 /// The two means of the `pixels`' colors (planar RGB of n pixels) by 2-means, started from a split
