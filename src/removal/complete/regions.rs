@@ -24,8 +24,9 @@
 //! few short ones along it.) Hole pixels whose line leaves the surface both ways take the region
 //! nearest to them.
 //!
-//! A CPU pass over each surface's pixels, beside the GPU synthesis (0.5-0.7 s of the statue
-//! `images_2` removal's 25 views, 33-42 ms at most for one view); textures that repeat (a
+//! A CPU pass over each surface's pixels in the exemplar's window, beside the GPU synthesis
+//! (0.5-0.7 s of the statue `images_2` removal's 25 views, whose holes' windows are nearly the
+//! whole image; 15 ms over cup-one's 18 views); textures that repeat (a
 //! checkerboard, `exemplar::RectifiedFill::repeats`) are continued in phase by the rectified
 //! synthesis and are left whole. On the benchmarks no path crosses a hole, and the step changes
 //! nothing measurable there (none of the synth rooms' surfaces splits; on the real-photo scenes
@@ -36,7 +37,8 @@
 //! pixels around the hole hold three colors (hedge, lawn, path), which two regions do not
 //! separate.
 
-use crate::image_ops::{distance_within, masked_box_mean};
+use super::surfaces::fill_window;
+use crate::image_ops::{bounding_box, crop, distance_within, masked_box_mean};
 use std::collections::VecDeque;
 
 /// Half the window the colors are smoothed over before the split, in pixels.
@@ -100,8 +102,9 @@ pub const FIRST_REGION_LABEL: u8 = 128;
 /// The surface labels (`labels`, 0 = none, a group of its own) of an image (w x h, planar RGB)
 /// whose `fill` is to be synthesized, with every surface that splits in two regions
 /// (`continue_regions`; the surface's known pixels are those outside `fill` and `avoid`) given
-/// two labels of its own from FIRST_REGION_LABEL on, in the fill and outside it; surfaces in
-/// `keep` (a texture that repeats, continued in phase already) stay whole.
+/// two labels of its own from FIRST_REGION_LABEL on, in the fill and around it (as far as the
+/// exemplar's window reaches); surfaces in `keep` (a texture that repeats, continued in phase
+/// already) stay whole.
 pub fn split_surfaces(
     image: &[f32],
     fill: &[bool],
@@ -111,9 +114,18 @@ pub fn split_surfaces(
     w: usize,
     h: usize,
 ) -> Vec<u8> {
-    let n = w * h;
     let mut out = labels.to_vec();
-    let mut present: Vec<u8> = (0..n).filter(|&p| fill[p]).map(|p| labels[p]).collect();
+    let Some(b) = bounding_box(fill, w) else { return out };
+    // The exemplar reads labels only in its window around the fill (`surfaces::fill_window`);
+    // grown by the band and its smoothing, every pixel of that window is classified here as over
+    // the whole image, at the window's cost, not the image's
+    let reach = BAND.ceil() as usize + SMOOTH_RADIUS + 1;
+    let win = fill_window(b, w, h).grown(reach, reach, w, h);
+    let (cw, ch) = (win.width(), win.height());
+    let cn = cw * ch;
+    let at = |k: usize| win.pixel(k, w);
+    let window = crop(image, w, h, 3, win);
+    let mut present: Vec<u8> = (0..cn).filter(|&k| fill[at(k)]).map(|k| labels[at(k)]).collect();
     present.sort_unstable();
     present.dedup();
     let mut next = FIRST_REGION_LABEL as u16;
@@ -121,11 +133,11 @@ pub fn split_surfaces(
         if next + 1 > u8::MAX as u16 {
             break; // no two labels left
         }
-        let hole: Vec<bool> = (0..n).map(|p| fill[p] && labels[p] == s).collect();
-        let known: Vec<bool> = (0..n).map(|p| !fill[p] && !avoid[p] && labels[p] == s).collect();
-        let Some(regions) = continue_regions(image, &hole, &known, w, h) else { continue };
-        for p in (0..n).filter(|&p| regions[p] != 0 && (hole[p] || known[p])) {
-            out[p] = (next + regions[p] as u16 - 1) as u8;
+        let hole: Vec<bool> = (0..cn).map(|k| fill[at(k)] && labels[at(k)] == s).collect();
+        let known: Vec<bool> = (0..cn).map(|k| !fill[at(k)] && !avoid[at(k)] && labels[at(k)] == s).collect();
+        let Some(regions) = continue_regions(&window, &hole, &known, cw, ch) else { continue };
+        for k in (0..cn).filter(|&k| regions[k] != 0 && (hole[k] || known[k])) {
+            out[at(k)] = (next + regions[k] as u16 - 1) as u8;
         }
         next += 2;
     }
