@@ -168,6 +168,9 @@ pub struct PatchPoint {
     /// The sampled pixel's footprint on the completed surface: the world-space steps across it in
     /// x and in y on the plane fitted there (`surface_steps`); None where no plane fits.
     pub steps: Option<[[f64; 3]; 2]>,
+    /// The edge of the voxel cell the point was merged in (`fuse_points`): the point stands for
+    /// the surface within it, so its Gaussian spans at least that much (`cell_steps`).
+    pub cell: f64,
 }
 
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -248,7 +251,7 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
                 let footprint = z * stride as f64 / v.camera.fx.min(v.camera.fy);
                 let steps = if cfg.surfels { surface_steps(v, &disparity, x, y, stride, footprint) } else { None };
                 let rgb = [v.rgb[i], v.rgb[hw + i], v.rgb[2 * hw + i]];
-                points.push(PatchPoint { position: p, rgb, footprint, steps });
+                points.push(PatchPoint { position: p, rgb, footprint, steps, cell: footprint });
             }
         }
     }
@@ -285,11 +288,28 @@ pub fn fuse_points(views: &[FuseView], cfg: &FuseConfig) -> (Vec<PatchPoint>, Fu
             position: s.position.map(|c| c / n),
             rgb: s.rgb.map(|c| c / n as f32),
             footprint: s.footprint,
-            steps: s.steps,
+            steps: s.steps.map(|steps| cell_steps(steps, voxel)),
+            cell: voxel,
         })
         .collect();
     stats.merged_into = merged.len();
     (merged, stats, kept)
+}
+
+/// A merged point's surface steps, each at least the cell's edge `cell` long (its direction kept).
+/// The cell is the median footprint, so a surface nearer than most of the patch (a pedestal's
+/// top under a removed statue, with the lawn behind it) merges several pixels into each cell;
+/// with one pixel's steps its Gaussian covered a third of the cell, and the surface rendered as
+/// a grating of stripes with the Gaussians behind it showing between them.
+fn cell_steps(steps: [[f64; 3]; 2], cell: f64) -> [[f64; 3]; 2] {
+    steps.map(|d| {
+        let length = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        if length > 0.0 && length < cell {
+            d.map(|c| c * cell / length)
+        } else {
+            d
+        }
+    })
 }
 
 /// Window radius (pixels) of the local plane that orients a patch Gaussian.
@@ -356,7 +376,7 @@ pub fn patch_gaussians(points: &[PatchPoint], sh_degree: u32, opacity: f32) -> G
     for p in points {
         let (log_scales, quat) = match p.steps {
             Some(steps) => surfel_shape(steps, 0.6),
-            None => ([(p.footprint.max(1e-6) * 0.6).ln() as f32; 3], [1.0, 0.0, 0.0, 0.0]),
+            None => ([(p.footprint.max(p.cell).max(1e-6) * 0.6).ln() as f32; 3], [1.0, 0.0, 0.0, 0.0]),
         };
         let mut sh = vec![0.0; 3 * k];
         for c in 0..3 {
