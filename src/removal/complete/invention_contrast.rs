@@ -32,7 +32,7 @@
 //! A CPU pass like edge_tone.rs, after the GPU inpainting: two box sums of the image per surface
 //! that holds inventions.
 
-use crate::image_ops::{box_count, box_sum};
+use crate::image_ops::masked_box_mean;
 
 /// Half the window of the local mean, in pixels: wider than the exemplar's patches (7 px), so
 /// that the mean is of several copied 7 x 7 patches, not of the one a pixel lies in (on statue-one
@@ -91,14 +91,12 @@ pub fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: us
     labels.dedup();
     for s in labels {
         let on_s: Vec<bool> = (0..n).map(|p| invented[p] && surfaces[p] == s).collect();
-        let masked: Vec<f32> = (0..3 * n).map(|i| if on_s[i % n] { rgb[i] } else { 0.0 }).collect();
-        let means = |radius: usize| (box_sum(&masked, w, h, 3, radius), box_count(&on_s, w, h, radius));
-        let (local, grain) = (means(CONTRAST_RADIUS), means(GRAIN_RADIUS));
+        // the pixel itself is in both windows: the means are of at least one pixel
+        let local = masked_box_mean(rgb, &on_s, w, h, 3, CONTRAST_RADIUS);
+        let grain = masked_box_mean(rgb, &on_s, w, h, 3, GRAIN_RADIUS);
         for p in (0..n).filter(|&p| on_s[p]) {
-            // the pixel itself is in both windows: the counts are at least 1
             for c in 0..3 {
-                let m = local.0[c * n + p] / local.1[p] as f32;
-                let g = grain.0[c * n + p] / grain.1[p] as f32;
+                let (m, g) = (local[c * n + p], grain[c * n + p]);
                 let v = &mut rgb[c * n + p];
                 *v = m + contrast.structure * (g - m) + contrast.grain * (*v - g);
             }

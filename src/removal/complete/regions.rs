@@ -69,13 +69,13 @@ const ITERATIONS: usize = 10;
 /// split in two (module comment).
 pub fn continue_regions(image: &[f32], hole: &[bool], known: &[bool], w: usize, h: usize) -> Option<Vec<u8>> {
     let n = w * h;
-    // each known pixel's color, the mean of the known pixels in its window
-    let smooth = masked_box_mean(image, known, w, h, 3, SMOOTH_RADIUS);
     let near = distance_within(hole, w, h, BAND);
     let band: Vec<usize> = (0..n).filter(|&p| known[p] && near[p] <= BAND).collect();
     if band.len() < MIN_BAND_PIXELS || !hole.iter().any(|&m| m) {
         return None;
     }
+    // each known pixel's color, the mean of the known pixels in its window
+    let smooth = masked_box_mean(image, known, w, h, 3, SMOOTH_RADIUS);
     let means = two_means(&smooth, &band, n)?;
     let region = |p: usize| {
         let d = |m: &[f64; 3]| (0..3).map(|c| (smooth[c * n + p] as f64 - m[c]).powi(2)).sum::<f64>();
