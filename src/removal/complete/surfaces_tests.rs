@@ -171,6 +171,44 @@ fn a_plane_continues_into_a_hole_only_between_its_own_pixels() {
     }
 }
 
+/// The statue capture's hole, in closed form: the hedge's far plane above, a path crossing behind
+/// the statue (a narrow band of ground beyond the lawn's brow, at about the hedge's depth where
+/// they meet), the lawn before it and the pedestal's face at the bottom, nearer than all. Four
+/// planes meet the hole; each hole pixel of the path's rows, flanked by the path on both sides,
+/// takes the path's exact disparity. With room for three planes the path, the smallest, was left
+/// out, and the rows behind the statue took a membrane of the lawn and the hedge: on the capture
+/// a dark block across the path in every view.
+#[test]
+fn a_path_crossing_behind_the_hole_continues_beside_three_larger_surfaces() {
+    let (w, h) = (96, 72);
+    // the lawn and the path meet at the brow (row 32, convex: each shows where it lies farther),
+    // the path and the hedge at its foot (row 24, concave: each shows where it lies nearer)
+    let lawn = Plane { a: 0.0, b: 0.004, c: 0.03 };
+    let path = Plane { a: 0.0, b: 0.01, c: 0.158 - 0.32 };
+    let far = Plane { a: 0.0, b: 0.0002, c: 0.078 - 0.0048 };
+    let pedestal = Plane { a: 0.0, b: 0.001, c: 0.4 };
+    let pedestal_at = |x: usize, y: usize| y >= 56 && (30..66).contains(&x);
+    let disp: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = center(i, w);
+            let ground = lawn.disparity(x, y).min(path.disparity(x, y)).max(far.disparity(x, y));
+            (if pedestal_at(i % w, i / w) { pedestal.disparity(x, y) } else { ground }) as f32
+        })
+        .collect();
+    let hole: Vec<bool> = (0..w * h).map(|i| (36..60).contains(&(i % w)) && (12..62).contains(&(i / w))).collect();
+    let known: Vec<bool> = hole.iter().map(|&m| !m).collect();
+    let s = surfaces_around(&disp, &known, &hole, w, h, 7);
+    assert_eq!(s.planes.len(), 4, "{:?}", s.planes);
+    let depth: Vec<f32> = disp.iter().zip(&hole).map(|(&d, &m)| if m { 0.0 } else { 1.0 / d }).collect();
+    let flanks = flanking(&s.flank_labels(&depth, w), &hole, w, h);
+    for i in (0..w * h).filter(|&i| hole[i] && (25..31).contains(&(i / w))) {
+        let (x, y) = center(i, w);
+        let (_, d) = s.visible_among(i, w, flanks[i]).unwrap_or_else(|| panic!("no plane at ({x}, {y})"));
+        let truth = path.disparity(x, y);
+        assert!((d - truth).abs() < 1e-4 * truth, "({x}, {y}): {d} against the path's {truth}");
+    }
+}
+
 /// A kept object's face (a near plane) runs up to the hole on both sides along a few rows, a
 /// wall lies behind everything, and the removed object stood between them. Nearest first the
 /// face would cover those rows of the hole; it lies in front of the removed object there, so
