@@ -181,11 +181,12 @@ fn a_plane_continues_into_a_hole_only_between_its_own_pixels() {
 #[test]
 fn a_path_crossing_behind_the_hole_continues_beside_three_larger_surfaces() {
     let (w, h) = (96, 72);
-    // the lawn and the path meet at the brow (row 32, convex: each shows where it lies farther),
-    // the path and the hedge at its foot (row 24, concave: each shows where it lies nearer)
+    // the lawn and the path meet at the brow (row 32, disparity 0.158; convex: each shows where it
+    // lies farther), the path and the hedge at its foot (row 24, 0.078; concave: each shows where
+    // it lies nearer)
     let lawn = Plane { a: 0.0, b: 0.004, c: 0.03 };
-    let path = Plane { a: 0.0, b: 0.01, c: 0.158 - 0.32 };
-    let far = Plane { a: 0.0, b: 0.0002, c: 0.078 - 0.0048 };
+    let path = Plane { a: 0.0, b: 0.01, c: 0.158 - 0.01 * 32.0 };
+    let far = Plane { a: 0.0, b: 0.0002, c: 0.078 - 0.0002 * 24.0 };
     let pedestal = Plane { a: 0.0, b: 0.001, c: 0.4 };
     let pedestal_at = |x: usize, y: usize| y >= 56 && (30..66).contains(&x);
     let disp: Vec<f32> = (0..w * h)
