@@ -147,7 +147,7 @@ pub struct FuseConfig {
     /// their fill size, and a point is dropped when a view earlier in that order completed the same
     /// surface there (its fill, within `tolerance` of its depth) and kept its own point there.
     /// Without it every view's points were kept and merged per voxel, so the patch held layers of
-    /// nearly coincident Gaussians whose colors the render averaged (bench/RESULTS.md: held-out
+    /// nearly coincident Gaussians whose colors the render averaged (commit `43b8697`: held-out
     /// masked PSNR 0.3-1.0 dB and seen-elsewhere PSNR 1.0-1.5 dB lower).
     #[arg(skip = true)]
     pub one_owner: bool,

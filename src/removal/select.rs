@@ -8,7 +8,7 @@
 //!    (alpha after removal at least `keep_alpha`, mostly the object's weight): that object stays as
 //!    it is. The background Gaussians left behind a removed object are no reason to keep a pixel's
 //!    render: few views constrained them, and keeping their render left the bench's far floor blurred
-//!    (held-out seen-elsewhere PSNR 0.5-1.1 dB lower, bench/RESULTS.md). Completion adds the
+//!    (held-out seen-elsewhere PSNR 0.5-1.1 dB lower, commit `2239581`). Completion adds the
 //!    object-covered pixels that look through a gap past the surrounding surfaces
 //!    (`complete::depth::see_through`).
 

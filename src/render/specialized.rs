@@ -4,8 +4,8 @@
 //! compiles away and loops over them unroll. That matters on lavapipe, which runs both sides of
 //! every branch with the lanes masked off, and the body of a loop once more after its last
 //! iteration: at 1M Gaussians, degree 0, 512x512, the fused projection backward + Adam went from
-//! 221-229 to 180-183 ms with the degree a constant (bench/RESULTS.md). Each variant is built on
-//! first use, so a scene trained at one degree compiles one.
+//! 221-229 to 180-183 ms with the degree a constant (bench/JOURNAL.md, 2026-11-25). Each variant
+//! is built on first use, so a scene trained at one degree compiles one.
 
 use crate::gpu::{ComputePipeline, Gpu};
 use anyhow::Result;

@@ -66,7 +66,7 @@ const PHOTO_DEPTH_TOLERANCE: f64 = 0.05;
 /// Gaussians sits in front of the surface the photo shows. On two-of-three, 27 % of the hole
 /// pixels other views saw found no source at 5 %; two thirds of those had a view that failed only
 /// this test, half of them by less than 8 %. At 10 % its seen-elsewhere PSNR rose 0.8 dB
-/// (bench/RESULTS.md).
+/// (commit `4e35174`).
 const TRANSFER_TOLERANCE: f64 = 0.10;
 
 /// Completion settings: the one home of their defaults, also `cogeo remove`'s flags. The models
