@@ -210,9 +210,9 @@ fn bench_top_continues(bench_end: f64, top_share: f64, hedge_share: f64, transfe
         let cameras = std::slice::from_ref(&cam);
         completer.transfer_colors(cameras, &[own()], &[&hole], &mut done, &mut |_, _| {}).unwrap();
         assert!(!done[0].texture_pending, "the transfer synthesized the texture");
-        // the transfer's fills of views on several threads at once (`views_in_parallel`, off on
-        // a CPU device) are those made one after another: the view, and a copy whose render is
-        // darker, so that a fill landing in the other view shows
+        // the transfer's fills of views on several threads at once (`views_in_parallel`) are
+        // those made one after another: the view, and a copy whose render is darker, so that a
+        // fill landing in the other view shows
         let darker: Vec<f32> = rendered.iter().map(|v| 0.7 * v).collect();
         let two_views = |parallel: bool| {
             let completer = Completer { views_in_parallel: parallel, ..default_completer(&gpu, &cam) };

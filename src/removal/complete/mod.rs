@@ -168,10 +168,12 @@ pub struct Completer {
     /// Contrast kept of the exemplar's random inventions, by scale (`invention_contrast`).
     pub invention_contrast: invention_contrast::Contrast,
     /// The transfer's texture fills (`texture_view`) of independent views (no shared
-    /// inventions, a built-in inpainter) run on all cores. On a GPU its host work then overlaps
-    /// (on a lent H200 this half of the stage, one view after another, was half of a removal's
-    /// time); on a CPU device the dispatches already take every core, and the speed scene's stage
-    /// went 10.8 -> 11.8 s in two pairs on 2 cores, so `load` sets it off there. Same result.
+    /// inventions, a built-in inpainter) run on all cores, so that one view's host work (the
+    /// rectification, the inventions' contrast) overlaps another's dispatches: on a lent H200
+    /// this half of the stage, one view after another, was half of a removal's time; on lavapipe
+    /// (2 cores) the speed scene's stage went 10.1 / 11.7 -> 7.8 / 9.2 s in two pairs (bench/
+    /// JOURNAL.md, 2026-12-03; slower there when the fill had less host work). Same result;
+    /// `false` runs them one after another (tests compare the two).
     pub views_in_parallel: bool,
     pub seed: u64,
 }
@@ -276,7 +278,7 @@ impl Completer {
                 grain: cfg.invention_contrast,
                 structure: cfg.invention_structure,
             },
-            views_in_parallel: !gpu.info().is_cpu(),
+            views_in_parallel: true,
             seed,
         })
     }
