@@ -240,11 +240,25 @@ pub fn box_count(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<u32> {
 /// The mean of the `mask` pixels of `img` (`channels` planes of `w` x `h`) in the (2r+1)^2 window
 /// around each `mask` pixel (normalized convolution: `box_sum` of the masked image over
 /// `box_count` of the mask); 0 off the mask.
+///
+/// The sums run over the mask's bounding box grown by `r` only: a mask pixel's window (rows and
+/// columns within `r` of it) lies inside it, so each of its sums adds the same values in the same
+/// order as over the whole image (a surface's inventions cover a small part of a view).
 pub fn masked_box_mean(img: &[f32], mask: &[bool], w: usize, h: usize, channels: usize, r: usize) -> Vec<f32> {
     let n = w * h;
-    let masked: Vec<f32> = (0..channels * n).map(|i| if mask[i % n] { img[i] } else { 0.0 }).collect();
-    let (sums, counts) = (box_sum(&masked, w, h, channels, r), box_count(mask, w, h, r));
-    (0..channels * n).map(|i| if mask[i % n] { sums[i] / counts[i % n] as f32 } else { 0.0 }).collect()
+    let mut out = vec![0.0; channels * n];
+    let Some(b) = bounding_box(mask, w) else { return out };
+    let win = b.grown(r, r, w, h);
+    let (ww, wh, wn) = (win.width(), win.height(), win.width() * win.height());
+    let local_mask: Vec<bool> = (0..wn).map(|k| mask[win.pixel(k, w)]).collect();
+    let masked: Vec<f32> = (0..channels * wn)
+        .map(|i| if local_mask[i % wn] { img[(i / wn) * n + win.pixel(i % wn, w)] } else { 0.0 })
+        .collect();
+    let (sums, counts) = (box_sum(&masked, ww, wh, channels, r), box_count(&local_mask, ww, wh, r));
+    for i in (0..channels * wn).filter(|&i| local_mask[i % wn]) {
+        out[(i / wn) * n + win.pixel(i % wn, w)] = sums[i] / counts[i % wn] as f32;
+    }
+    out
 }
 
 /// Maxima of `img` (`channels` planes of `w` x `h`) over the (2r+1)^2 window around each pixel,
@@ -393,6 +407,29 @@ mod tests {
         assert_eq!(soft[10 * w + 10], 1.0);
         assert_eq!(soft[10 * w + 15], 0.0);
         assert!(soft[10 * w + 12] > 0.0 && soft[10 * w + 12] < 1.0);
+    }
+
+    #[test]
+    fn masked_box_mean_in_the_masks_box_equals_the_whole_images() {
+        let mut rng = crate::rng::Rng::new(5);
+        for trial in 0..60 {
+            let (w, h, channels) = (5 + rng.below(40), 4 + rng.below(30), 1 + trial % 3);
+            let img: Vec<f32> = (0..channels * w * h).map(|_| rng.uniform() as f32).collect();
+            // a blob somewhere, sometimes at a border, or nothing
+            let (cx, cy, rad) = (rng.below(w) as f64, rng.below(h) as f64, 4.0 * rng.uniform());
+            let mask: Vec<bool> = (0..w * h)
+                .map(|p| trial % 10 != 0 && ((p % w) as f64 - cx).hypot((p / w) as f64 - cy) <= rad)
+                .collect();
+            let r = rng.below(6);
+            let n = w * h;
+            // the whole image's normalized convolution, as before the crop
+            let masked: Vec<f32> = (0..channels * n).map(|i| if mask[i % n] { img[i] } else { 0.0 }).collect();
+            let (sums, counts) = (box_sum(&masked, w, h, channels, r), box_count(&mask, w, h, r));
+            let want: Vec<f32> =
+                (0..channels * n).map(|i| if mask[i % n] { sums[i] / counts[i % n] as f32 } else { 0.0 }).collect();
+            let got = masked_box_mean(&img, &mask, w, h, channels, r);
+            assert!(got.iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()), "trial {trial}");
+        }
     }
 
     /// The chamfer pixel by pixel, as `distance_to` was written first.
