@@ -20,11 +20,10 @@ pub fn for_each_item<T: Send>(
     std::thread::scope(|scope| {
         for _ in 0..threads {
             let (work, queue, done_tx) = (&work, &queue, done_tx.clone());
-            scope.spawn(move || {
-                while let Some((i, item)) = queue.lock().ok().and_then(|mut q| q.next()) {
-                    work(i, item);
-                    let _ = done_tx.send(());
-                }
+            scope.spawn(move || loop {
+                let Some((i, item)) = queue.lock().ok().and_then(|mut q| q.next()) else { break };
+                work(i, item);
+                let _ = done_tx.send(());
             });
         }
         drop(done_tx);
