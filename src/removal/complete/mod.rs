@@ -171,9 +171,9 @@ pub struct Completer {
     /// inventions, a built-in inpainter) run on all cores, so that one view's host work (the
     /// rectification, the inventions' contrast) overlaps another's dispatches: on a lent H200
     /// this half of the stage, one view after another, was half of a removal's time; on lavapipe
-    /// (2 cores) the speed scene's stage went 10.1 / 11.7 -> 7.8 / 9.2 s in two pairs (bench/
-    /// JOURNAL.md, 2026-12-03; slower there when the fill had less host work). Same result;
-    /// `false` runs them one after another (tests compare the two).
+    /// (2 cores) the speed scene's stage went 10.1 / 11.7 -> 7.8 / 9.2 s in two pairs
+    /// (bench/JOURNAL.md, 2026-12-03; slower there when the fill had less host work). Same
+    /// result; `false` runs them one after another (tests compare the two).
     pub views_in_parallel: bool,
     pub seed: u64,
 }
