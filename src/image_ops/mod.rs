@@ -251,9 +251,8 @@ pub fn masked_box_mean(img: &[f32], mask: &[bool], w: usize, h: usize, channels:
     let win = b.grown(r, r, w, h);
     let (ww, wh, wn) = (win.width(), win.height(), win.width() * win.height());
     let local_mask: Vec<bool> = (0..wn).map(|k| mask[win.pixel(k, w)]).collect();
-    let masked: Vec<f32> = (0..channels * wn)
-        .map(|i| if local_mask[i % wn] { img[(i / wn) * n + win.pixel(i % wn, w)] } else { 0.0 })
-        .collect();
+    let mut masked = crop(img, w, h, channels, win);
+    masked.iter_mut().enumerate().filter(|(i, _)| !local_mask[i % wn]).for_each(|(_, v)| *v = 0.0);
     let (sums, counts) = (box_sum(&masked, ww, wh, channels, r), box_count(&local_mask, ww, wh, r));
     for i in (0..channels * wn).filter(|&i| local_mask[i % wn]) {
         out[(i / wn) * n + win.pixel(i % wn, w)] = sums[i] / counts[i % wn] as f32;
