@@ -35,6 +35,37 @@ fn a_window_camera_renders_the_windows_pixels_as_the_whole_view_does() {
     assert!(worst(&part.alpha, &expected_alpha) < 2e-4, "alpha differs by {}", worst(&part.alpha, &expected_alpha));
 }
 
+/// A window rendered from only the Gaussians that can reach it (`ViewRenderer::render_window`,
+/// on a CPU device; `render::reach`) is the window rendered from the whole scene, bit for bit:
+/// colors at two SH bands, alpha, both depths and the marked Gaussians' weight.
+#[test]
+fn a_window_from_the_gaussians_that_reach_it_is_the_whole_scenes_window() {
+    let gpu = common::gpu();
+    let scene = random_scene(31, 2, SceneMix::default());
+    let mut camera = test_camera(96, 72);
+    camera.cx += 0.37;
+    let window = window_camera(&camera, Rect { x0: 60, y0: 8, x1: 84, y1: 30 });
+    let near = RenderSettings::default().near as f64;
+    let reach = cogeo::render::reach::reaching(&scene, &window, near);
+    let kept = reach.iter().filter(|&&r| r).count();
+    assert!(kept > 20 && kept < scene.len() / 2, "{kept} of {} Gaussians reach the window", scene.len());
+    let marked: Vec<bool> = scene.means.iter().map(|m| m[0] > 0.5).collect();
+    let mut renderer = ViewRenderer::new(&gpu, &scene, Some(&marked), DepthPlanes::Both).unwrap();
+    let bg = [0.2f32, 0.4, 0.6];
+    let whole = renderer.render(&window, bg).unwrap();
+    assert!(whole.alpha.iter().filter(|&&a| a > 0.5).count() > 300, "the window shows little of the scene");
+    assert!(whole.weight.iter().filter(|&&x| x > 0.1).count() > 50, "no marked weight in the window");
+    // twice: the second part goes into the first one's buffers
+    for _ in 0..2 {
+        let part = renderer.render_window(&window, bg).unwrap();
+        assert!(part.rgb == whole.rgb, "rgb differs");
+        assert!(part.alpha == whole.alpha, "alpha differs");
+        assert!(part.depth == whole.depth, "expected depth differs");
+        assert!(part.median == whole.median, "median depth differs");
+        assert!(part.weight == whole.weight, "weight differs");
+    }
+}
+
 /// The point 4 units in front of `camera` at pixel (x, y), mirrored through the eye: behind it.
 fn behind_camera(camera: &cogeo::scene::Camera, x: usize, y: usize) -> [f32; 3] {
     let (c, eye) = (camera.pixel_point(x, y, 4.0), camera.pixel_point(x, y, 0.0));

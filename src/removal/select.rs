@@ -15,6 +15,7 @@
 use crate::gpu::Gpu;
 use crate::image_ops::{bounding_box, dilate, including, Rect};
 use crate::removal::refine::window_camera;
+use crate::render::reach::{reaching, render_subset};
 use crate::render::reference::project;
 use crate::render::{RenderSettings, SceneRenderer};
 use crate::scene::{Camera, GaussianScene};
@@ -65,9 +66,16 @@ pub enum DepthPlanes {
 }
 
 /// Renders RGB, alpha, depth and (with `marked`) the marked Gaussians' weight.
-pub struct ViewRenderer {
+pub struct ViewRenderer<'s> {
+    gpu: &'s Gpu,
+    scene: &'s GaussianScene,
+    /// The marked Gaussians' weight, one per Gaussian; None without `marked`.
+    feature: Option<Vec<f32>>,
     renderer: SceneRenderer,
-    features: bool,
+    /// `render_window`'s: the Gaussians that can reach the window, uploaded for it.
+    window_renderer: Option<SceneRenderer>,
+    /// The scene's learnt SH bands (`GaussianScene::learnt_sh_degree`), all a window's part needs.
+    learnt_sh_degree: u32,
     planes: DepthPlanes,
 }
 
@@ -84,24 +92,49 @@ pub struct Rendered {
     pub median: Vec<f32>,
 }
 
-impl ViewRenderer {
-    pub fn new(gpu: &Gpu, scene: &GaussianScene, marked: Option<&[bool]>, planes: DepthPlanes) -> Result<ViewRenderer> {
+impl<'s> ViewRenderer<'s> {
+    pub fn new(
+        gpu: &'s Gpu,
+        scene: &'s GaussianScene,
+        marked: Option<&[bool]>,
+        planes: DepthPlanes,
+    ) -> Result<ViewRenderer<'s>> {
         let feature: Option<Vec<f32>> = marked.map(|r| r.iter().map(|&x| x as u8 as f32).collect());
         let renderer = SceneRenderer::new(gpu, scene, feature.as_deref().map(|f| (f, 1)))?;
-        Ok(ViewRenderer { renderer, features: marked.is_some(), planes })
+        let learnt_sh_degree = scene.learnt_sh_degree();
+        Ok(ViewRenderer { gpu, scene, feature, renderer, window_renderer: None, learnt_sh_degree, planes })
     }
 
     pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
-        let median_depth = self.planes != DepthPlanes::Expected;
-        let settings = RenderSettings { background, features: self.features, median_depth, ..Default::default() };
-        let o = self.renderer.render(camera, &settings)?;
-        let weight = if self.features { o.features } else { vec![0.0; o.alpha.len()] };
-        let (depth, median) = match self.planes {
-            DepthPlanes::Expected => (o.expected_depth, Vec::new()),
-            DepthPlanes::Median => (o.median_depth, Vec::new()),
-            DepthPlanes::Both => (o.expected_depth, o.median_depth),
+        draw(&mut self.renderer, self.feature.is_some(), self.planes, camera, background)
+    }
+
+    /// `render` of a small part of a view (`refine::window_camera`), on a CPU device from only the
+    /// Gaussians that can reach it (`render::reach`): the same image, bit for bit, without
+    /// projecting and sorting the whole scene. On the statue `images_2` the hull's and the masks'
+    /// 325 window renders took a third of its Gaussians each and 9.9 s in place of 11.0 s, the
+    /// cull and upload on the host included (bench/JOURNAL.md, 2026-12-03, 06:31). A GPU sorts
+    /// the whole scene in less time than an upload through a staging buffer takes.
+    pub fn render_window(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
+        if !self.gpu.info().is_cpu() {
+            return self.render(camera, background);
+        }
+        let keep = reaching(self.scene, camera, RenderSettings::default().near as f64);
+        if !keep.contains(&true) {
+            return self.render(camera, background);
+        }
+        let part = render_subset(self.scene, &keep, self.learnt_sh_degree);
+        let feature: Option<Vec<f32>> =
+            self.feature.as_ref().map(|f| f.iter().zip(&keep).filter(|(_, &k)| k).map(|(&v, _)| v).collect());
+        let feature = feature.as_deref().map(|f| (f, 1));
+        let renderer = match &mut self.window_renderer {
+            Some(r) => {
+                r.upload(self.gpu, &part, feature)?;
+                r
+            }
+            none => none.insert(SceneRenderer::new(self.gpu, &part, feature)?),
         };
-        Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth, weight, median })
+        draw(renderer, self.feature.is_some(), self.planes, camera, background)
     }
 
     /// `render` of `window` of the view only (`refine::window_camera`: the whole view's pixels,
@@ -115,7 +148,7 @@ impl ViewRenderer {
         background: [f32; 3],
         outside: &Rendered,
     ) -> Result<Rendered> {
-        let part = self.render(&window_camera(camera, window), background)?;
+        let part = self.render_window(&window_camera(camera, window), background)?;
         let mut whole = Rendered {
             rgb: outside.rgb.clone(),
             alpha: outside.alpha.clone(),
@@ -126,6 +159,27 @@ impl ViewRenderer {
         whole.paste(window, &part, camera.width as usize);
         Ok(whole)
     }
+}
+
+/// One render through `renderer` with the marked Gaussians' weight (`features`) and the depth
+/// planes `planes`.
+fn draw(
+    renderer: &mut SceneRenderer,
+    features: bool,
+    planes: DepthPlanes,
+    camera: &Camera,
+    background: [f32; 3],
+) -> Result<Rendered> {
+    let median_depth = planes != DepthPlanes::Expected;
+    let settings = RenderSettings { background, features, median_depth, ..Default::default() };
+    let o = renderer.render(camera, &settings)?;
+    let weight = if features { o.features } else { vec![0.0; o.alpha.len()] };
+    let (depth, median) = match planes {
+        DepthPlanes::Expected => (o.expected_depth, Vec::new()),
+        DepthPlanes::Median => (o.median_depth, Vec::new()),
+        DepthPlanes::Both => (o.expected_depth, o.median_depth),
+    };
+    Ok(Rendered { rgb: o.rgb, alpha: o.alpha, depth, weight, median })
 }
 
 impl Rendered {
@@ -283,12 +337,12 @@ pub fn hole_masks(
 /// scene after removal with the kept objects' weight. A scene without kept objects needs no
 /// weight of theirs: the feature blend was 40 % of a render on the statue (`Rendered::weight` is
 /// then zero everywhere).
-fn view_renderers(
-    gpu: &Gpu,
-    scene: &GaussianScene,
-    selection: &Selection,
+fn view_renderers<'s>(
+    gpu: &'s Gpu,
+    scene: &'s GaussianScene,
+    selection: &'s Selection,
     planes: DepthPlanes,
-) -> Result<(ViewRenderer, ViewRenderer)> {
+) -> Result<(ViewRenderer<'s>, ViewRenderer<'s>)> {
     let original = ViewRenderer::new(gpu, scene, Some(&selection.removed), planes)?;
     let kept = selection.kept_objects.iter().any(|&k| k).then_some(&selection.kept_objects[..]);
     Ok((original, ViewRenderer::new(gpu, &selection.background, kept, planes)?))
@@ -332,8 +386,8 @@ pub fn redraw_hole_masks(
         let (w, h) = (cam.width as usize, cam.height as usize);
         if let Some(window) = splat_window(scene, taken, cam).map(|r| r.grown(grow, grow, w, h)) {
             let part_camera = window_camera(cam, window);
-            view.before.paste(window, &original.render(&part_camera, cfg.background)?, w);
-            view.after_removal.paste(window, &remaining.render(&part_camera, cfg.background)?, w);
+            view.before.paste(window, &original.render_window(&part_camera, cfg.background)?, w);
+            view.after_removal.paste(window, &remaining.render_window(&part_camera, cfg.background)?, w);
             let before = &view.before;
             view.hole = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, cfg.dilate);
             (view.fill, view.footprint) = fill_and_footprint(before, &view.after_removal, &view.hole, cfg, w, h);

@@ -8,6 +8,7 @@ mod blend_layout;
 mod features;
 mod moved;
 pub mod params;
+pub mod reach;
 pub mod reference;
 mod scene_renderer;
 pub(crate) mod specialized;

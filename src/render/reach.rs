@@ -1,0 +1,106 @@
+//! Which Gaussians a render of a camera can bin: a cheap superset, so that a render of a small
+//! window (the removal's hull redraws each view's hole in one, `removal::select`) projects and
+//! sorts only the Gaussians that can reach it, not the whole scene.
+//!
+//! The bound follows project.comp: a Gaussian is binned only where its ellipse, at the binning
+//! threshold (`binning_q_threshold`, at most 2 ln 255 and its float32 margin, under `Q_MAX`), is
+//! within a pixel of the image; the ellipse's half extent along x is sqrt(q cov2d_xx) and
+//! cov2d_xx = j0 cov j0^T + 0.3 with j0 = fx / z (1, 0, -x / z) the Jacobian's first row (its
+//! x / z clamped, which only shortens it), at most |j0|^2 times the largest scale squared plus
+//! 0.3. Every other Gaussian touches no pixel, and the renderer's sorts are stable (by depth,
+//! then by tile), so a render of the subset, in the scene's order, is the render of the scene,
+//! bit for bit (`tests/refine_window.rs`).
+
+use crate::scene::{Camera, GaussianScene};
+
+/// Above the binning threshold at opacity 1, 2 ln(255) with its margin (11.09).
+const Q_MAX: f64 = 12.0;
+
+/// Whether Gaussian `i` of `scene` can be binned into any pixel of `camera`'s image, its view
+/// depth culled at `near` (a superset: 1 % and two pixels wider than the bound for float32).
+pub fn may_reach(scene: &GaussianScene, i: usize, camera: &Camera, near: f64) -> bool {
+    let m = scene.means[i];
+    let [x, y, z] = camera.to_camera([m[0] as f64, m[1] as f64, m[2] as f64]);
+    // float32's view depth may pass the near plane where float64's does not
+    if z <= near - 1e-6 * (1.0 + near.abs() + z.abs()) {
+        return false;
+    }
+    let largest = scene.log_scales[i].iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)) as f64;
+    let variance = (2.0 * largest).exp();
+    let z = z.max(f64::MIN_POSITIVE);
+    let (u, v) = (x / z, y / z);
+    let half = |f: f64, slope: f64| {
+        let row = (f / z).powi(2) * (1.0 + slope * slope);
+        (Q_MAX * (row * variance + 0.3)).sqrt() * 1.01 + 2.0
+    };
+    let (rx, ry) = (half(camera.fx, u), half(camera.fy, v));
+    let (px, py) = (camera.fx * u + camera.cx, camera.fy * v + camera.cy);
+    // NaN anywhere (a degenerate Gaussian) keeps it: the renderer decides
+    !(px + rx < 0.0 || py + ry < 0.0 || px - rx > camera.width as f64 || py - ry > camera.height as f64)
+}
+
+/// `may_reach` for every Gaussian of `scene`.
+pub fn reaching(scene: &GaussianScene, camera: &Camera, near: f64) -> Vec<bool> {
+    (0..scene.len()).map(|i| may_reach(scene, i, camera, near)).collect()
+}
+
+/// The Gaussians `keep` marks, with only what a render reads (positions, scales, rotations,
+/// opacities) and their SH bands up to `degree`, in order.
+pub fn render_subset(scene: &GaussianScene, keep: &[bool], degree: u32) -> GaussianScene {
+    let k = scene.sh_coeffs() * 3;
+    let kept = crate::scene::sh_coeffs(degree) * 3;
+    let idx: Vec<usize> = (0..scene.len()).filter(|&i| keep[i]).collect();
+    GaussianScene {
+        means: idx.iter().map(|&i| scene.means[i]).collect(),
+        normals: Vec::new(),
+        log_scales: idx.iter().map(|&i| scene.log_scales[i]).collect(),
+        quats: idx.iter().map(|&i| scene.quats[i]).collect(),
+        opacity_logits: idx.iter().map(|&i| scene.opacity_logits[i]).collect(),
+        sh_degree: degree,
+        sh: idx.iter().flat_map(|&i| scene.sh[i * k..i * k + kept].iter().copied()).collect(),
+        extras: Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::image_ops::Rect;
+    use crate::render::reference::project;
+    use crate::rng::Rng;
+
+    /// Every Gaussian whose support (the reference projection's pixel box at its opacity) meets
+    /// the image is kept, over random Gaussians in and around the view of a camera and of a small
+    /// window of it; and most of those far outside are not.
+    #[test]
+    fn keeps_every_gaussian_whose_support_meets_the_image() {
+        let mut rng = Rng::new(7);
+        let mut scene = GaussianScene::default();
+        for _ in 0..20000 {
+            let mean = [rng.range(-20.0, 20.0) as f32, rng.range(-15.0, 15.0) as f32, rng.range(-1.0, 9.0) as f32];
+            let log_scales = [0; 3].map(|_| rng.range(-5.0, -0.5) as f32);
+            let quat = [0; 4].map(|_| rng.normal() as f32);
+            scene.push(mean, log_scales, quat, rng.range(-4.0, 6.0) as f32, &[0.1, 0.2, 0.3]);
+        }
+        let camera = Camera::look_at("v", 160, 120, 70.0, [0.0, 0.0, -3.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]);
+        let window = Rect { x0: 70, y0: 50, x1: 100, y1: 70 };
+        for cam in [camera.clone(), crate::removal::refine::window_camera(&camera, window)] {
+            let (mut met, mut kept, mut far) = (0, 0, 0);
+            for i in 0..scene.len() {
+                let reach = may_reach(&scene, i, &cam, 0.01);
+                kept += reach as usize;
+                match project(&scene, i, &cam, 0.01, 0).and_then(|g| g.support()) {
+                    Some([x0, x1, y0, y1])
+                        if x1 >= 0.0 && y1 >= 0.0 && x0 <= cam.width as f64 && y0 <= cam.height as f64 =>
+                    {
+                        met += 1;
+                        assert!(reach, "Gaussian {i} meets the {}x{} image but was left out", cam.width, cam.height);
+                    }
+                    _ => far += 1,
+                }
+            }
+            assert!(met > 100, "{met} Gaussians meet the {}x{} image: the test needs more", cam.width, cam.height);
+            assert!(kept - met < far / 2, "kept {kept}, of which {met} meet the image and {far} do not");
+        }
+    }
+}
