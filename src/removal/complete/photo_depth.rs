@@ -56,7 +56,7 @@ const FADE_PIXELS: usize = 8;
 
 /// The spread of the colors several photos show of one point: sums and sums of squares, so that
 /// adding a color allocates nothing.
-#[derive(Default)]
+#[derive(Clone, Default)]
 pub struct ColorSpread {
     k: usize,
     sum: [f64; 3],
@@ -81,6 +81,27 @@ impl ColorSpread {
         let k = self.k as f64;
         Some((0..3).map(|c| (self.squares[c] / k - (self.sum[c] / k).powi(2)).max(0.0)).sum())
     }
+}
+
+/// Scales `add_samples` projects at once.
+const LANDINGS: usize = 16;
+
+/// Where the point a + s b (camera frame, `line` = [a, b]) lands in `camera`'s image for each s
+/// of `scales` (at most `LANDINGS`): `Camera::camera_point_to_image`'s arithmetic for all the
+/// scales in one loop the compiler vectorizes, NaN where it lands nowhere.
+#[inline(always)]
+fn landings(camera: &Camera, line: &[[f64; 3]; 2], scales: &[f64]) -> [(f64, f64); LANDINGS] {
+    let [a, b] = line;
+    let (w, h) = (camera.width as f64, camera.height as f64);
+    let mut out = [(f64::NAN, f64::NAN); LANDINGS];
+    for (o, &scale) in out.iter_mut().zip(scales) {
+        let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
+        let x = camera.fx * pc[0] / pc[2] + camera.cx;
+        let y = camera.fy * pc[1] / pc[2] + camera.cy;
+        let inside = pc[2] > 1e-6 && x >= 0.0 && y >= 0.0 && x < w && y < h;
+        *o = if inside { (x, y) } else { (f64::NAN, f64::NAN) };
+    }
+    out
 }
 
 /// The hole pixels of one view that two or more other views saw, with those views: pixel i is
@@ -112,20 +133,42 @@ impl SeenPixels<'_> {
     /// camera, hole and photo are looked up once for all the scales, and its samples lie close
     /// together in its photo. Each spread still takes the views in their order: the sums of one
     /// scale at a time, bit for bit (the stage 3.6 -> 2.9 s on the statue `images_2`, ~130 scales
-    /// per pixel).
+    /// per pixel). Where a chunk of scales lands is found first, in a loop the compiler
+    /// vectorizes (`landings`), then each landing is sampled: this function's samples in a
+    /// `--no-refine` removal of the statue `images_2` fell by a fifth (bench/JOURNAL.md,
+    /// 2026-12-03, 06:31).
     fn add_samples(&self, i: usize, scales: &[f64], spreads: &mut [ColorSpread]) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above
+            return unsafe { self.add_samples_avx2(i, scales, spreads) };
+        }
+        self.add_samples_portable(i, scales, spreads)
+    }
+
+    /// `add_samples` compiled for AVX2 too: four scales' landings at once, the same IEEE
+    /// operations (no fused multiply-add), so the same sums.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn add_samples_avx2(&self, i: usize, scales: &[f64], spreads: &mut [ColorSpread]) {
+        self.add_samples_portable(i, scales, spreads)
+    }
+
+    #[inline(always)]
+    fn add_samples_portable(&self, i: usize, scales: &[f64], spreads: &mut [ColorSpread]) {
         let range = self.starts[i]..self.starts[i + 1];
-        for (&j, [a, b]) in self.views[range.clone()].iter().zip(&self.lines[range]) {
+        for (&j, line) in self.views[range.clone()].iter().zip(&self.lines[range]) {
             let s = &self.sources[j as usize];
             let (sw, sh) = (s.camera.width as usize, s.camera.height as usize);
             let photo = &self.photos[j as usize];
-            for (spread, &scale) in spreads.iter_mut().zip(scales) {
-                let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
-                let Some((x, y, _)) = s.camera.camera_point_to_image(pc) else { continue };
-                if s.hole[y as usize * sw + x as usize] {
-                    continue;
+            for (scales, spreads) in scales.chunks(LANDINGS).zip(spreads.chunks_mut(LANDINGS)) {
+                let landed = landings(s.camera, line, scales);
+                for (spread, &(x, y)) in spreads.iter_mut().zip(&landed) {
+                    if x.is_nan() || s.hole[y as usize * sw + x as usize] {
+                        continue;
+                    }
+                    spread.add(sample_bilinear_pixels(photo, sw, sh, x, y));
                 }
-                spread.add(sample_bilinear_pixels(photo, sw, sh, x, y));
             }
         }
     }
@@ -315,4 +358,98 @@ pub fn correct_hole_depth(
         *d = (*d as f64 * factor[p]) as f32;
     }
     DepthScale { scale: global, pixels: n, cost_before, cost_after }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    /// `add_samples` (the landings of a chunk of scales at once, compiled for AVX2 where the CPU
+    /// has it) adds the same colors in the same order as one scale at a time through
+    /// `Camera::camera_point_to_image` and `sample_bilinear_pixels`, bit for bit: lines through
+    /// three views at 101 scales (chunks and a remainder), points that land outside an image,
+    /// behind a camera or on a hole.
+    #[test]
+    fn landings_chunk_by_chunk_add_what_one_scale_at_a_time_adds() {
+        let mut rng = Rng::new(5);
+        let (w, h) = (64usize, 48usize);
+        let cameras: Vec<Camera> = (0..3)
+            .map(|k| {
+                let eye = [-1.0 + k as f64, 0.2 * k as f64, -3.0];
+                Camera::look_at("s", w as u32, h as u32, 60.0, eye, [0.0, 0.0, 1.0], [0.0, -1.0, 0.0])
+            })
+            .collect();
+        let holes: Vec<Vec<bool>> = (0..3).map(|_| (0..w * h).map(|_| rng.uniform() < 0.1).collect()).collect();
+        let planar: Vec<Vec<f32>> = (0..3).map(|_| (0..3 * w * h).map(|_| rng.uniform() as f32).collect()).collect();
+        let photos: Vec<Vec<[f32; 3]>> = planar.iter().map(|p| crate::image_ops::interleave_rgb(p, w * h)).collect();
+        let flat = vec![1.0f32; w * h];
+        let sources: Vec<SourceView> = (0..3)
+            .map(|k| SourceView {
+                camera: &cameras[k],
+                photo: &planar[k],
+                hole: &holes[k],
+                depth: &flat,
+                alpha: &flat,
+                photo_colors: Default::default(),
+            })
+            .collect();
+        // 40 pixels' world lines, each seen by all three views; some reach behind the cameras
+        let (mut views, mut lines, mut starts) = (Vec::new(), Vec::new(), vec![0]);
+        for _ in 0..40 {
+            let world = [rng.range(-3.0, 3.0), rng.range(-2.0, 2.0), rng.range(-4.0, 3.0)];
+            let origin = [rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), -3.5];
+            for (j, cam) in cameras.iter().enumerate() {
+                let (a, at) = (cam.to_camera(origin), cam.to_camera(world));
+                views.push(j as u32);
+                lines.push([a, std::array::from_fn(|c| at[c] - a[c])]);
+            }
+            starts.push(views.len());
+        }
+        let seen = SeenPixels { sources: &sources, photos: &photos, pixels: vec![0; 40], views, lines, starts };
+        let scales: Vec<f64> = (0..101).map(|k| 0.5 + k as f64 * 0.01).collect();
+        // where each scale lands, to the bit
+        for (k, line) in seen.lines.iter().enumerate() {
+            let camera = sources[seen.views[k] as usize].camera;
+            for chunk in scales.chunks(LANDINGS) {
+                for (&(x, y), &scale) in landings(camera, line, chunk).iter().zip(chunk) {
+                    let [a, b] = line;
+                    let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
+                    match camera.camera_point_to_image(pc) {
+                        Some((ex, ey, _)) => assert_eq!((x.to_bits(), y.to_bits()), (ex.to_bits(), ey.to_bits())),
+                        None => assert!(x.is_nan() && y.is_nan()),
+                    }
+                }
+            }
+        }
+        let (mut sampled, mut skipped) = (0, 0);
+        for i in 0..40 {
+            let mut chunked = vec![ColorSpread::default(); scales.len()];
+            seen.add_samples(i, &scales, &mut chunked);
+            let mut single = vec![ColorSpread::default(); scales.len()];
+            for (spread, &scale) in single.iter_mut().zip(&scales) {
+                for k in seen.starts[i]..seen.starts[i + 1] {
+                    let (s, [a, b]) = (&sources[seen.views[k] as usize], seen.lines[k]);
+                    let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
+                    let Some((x, y, _)) = s.camera.camera_point_to_image(pc) else {
+                        skipped += 1;
+                        continue;
+                    };
+                    if s.hole[y as usize * w + x as usize] {
+                        skipped += 1;
+                        continue;
+                    }
+                    sampled += 1;
+                    spread.add(sample_bilinear_pixels(&photos[seen.views[k] as usize], w, h, x, y));
+                }
+            }
+            for (c, s) in chunked.iter().zip(&single) {
+                assert_eq!(
+                    (c.k, c.sum.map(f64::to_bits), c.squares.map(f64::to_bits)),
+                    (s.k, s.sum.map(f64::to_bits), s.squares.map(f64::to_bits))
+                );
+            }
+        }
+        assert!(sampled > 2000 && skipped > 500, "{sampled} samples, {skipped} off the images or on holes");
+    }
 }
