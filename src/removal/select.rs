@@ -112,7 +112,7 @@ impl<'s> ViewRenderer<'s> {
     /// `render` of a small part of a view (`refine::window_camera`), on a CPU device from only the
     /// Gaussians that can reach it (`render::reach`): the same image, bit for bit, without
     /// projecting and sorting the whole scene. On the statue `images_2` the hull's and the masks'
-    /// 325 window renders took a third of its Gaussians each and 9.9 s in place of 11.0 s, the
+    /// 325 window renders took a fifth to a third of its Gaussians and 9.9 s in place of 11.0 s, the
     /// cull and upload on the host included (bench/JOURNAL.md, 2026-12-03, 06:31). A GPU should
     /// sort the whole scene in less time than an upload through a staging buffer takes (not
     /// measured: no GPU was lent), so it renders the window from the whole scene.
