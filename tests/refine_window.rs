@@ -37,7 +37,7 @@ fn a_window_camera_renders_the_windows_pixels_as_the_whole_view_does() {
 
 /// A window rendered from only the Gaussians that can reach it (`ViewRenderer::render_window`,
 /// on a CPU device; `render::reach`) is the window rendered from the whole scene, bit for bit:
-/// colors at two SH bands, alpha, both depths and the marked Gaussians' weight.
+/// colors at SH degree 2, alpha, both depths and the marked Gaussians' weight.
 #[test]
 fn a_window_from_the_gaussians_that_reach_it_is_the_whole_scenes_window() {
     let gpu = common::gpu();
