@@ -109,12 +109,19 @@ impl Camera {
 
     /// `project_to_image` of a point already in camera coordinates.
     pub fn camera_point_to_image(&self, pc: [f64; 3]) -> Option<(f64, f64, f64)> {
-        if pc[2] <= 1e-6 {
-            return None;
-        }
+        let (x, y, lands) = self.camera_point_landing(pc);
+        lands.then_some((x, y, pc[2]))
+    }
+
+    /// `camera_point_to_image` without a branch, for loops the compiler vectorizes: the image
+    /// point (x, y) and whether the point lands there (in front of the camera, inside the image);
+    /// x and y mean nothing where it does not.
+    #[inline(always)]
+    pub fn camera_point_landing(&self, pc: [f64; 3]) -> (f64, f64, bool) {
         let x = self.fx * pc[0] / pc[2] + self.cx;
         let y = self.fy * pc[1] / pc[2] + self.cy;
-        (x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64).then_some((x, y, pc[2]))
+        let lands = pc[2] > 1e-6 && x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64;
+        (x, y, lands)
     }
 
     /// The pixel `p` lands in: its row-major index and the view depth; None when it is behind

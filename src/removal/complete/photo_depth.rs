@@ -87,19 +87,16 @@ impl ColorSpread {
 const LANDINGS: usize = 16;
 
 /// Where the point a + s b (camera frame, `line` = [a, b]) lands in `camera`'s image for each s
-/// of `scales` (at most `LANDINGS`): `Camera::camera_point_to_image`'s arithmetic for all the
-/// scales in one loop the compiler vectorizes, NaN where it lands nowhere.
+/// of `scales` (at most `LANDINGS`): `Camera::camera_point_landing` for all the scales in one
+/// loop the compiler vectorizes, NaN where it lands nowhere.
 #[inline(always)]
 fn landings(camera: &Camera, line: &[[f64; 3]; 2], scales: &[f64]) -> [(f64, f64); LANDINGS] {
     let [a, b] = line;
-    let (w, h) = (camera.width as f64, camera.height as f64);
     let mut out = [(f64::NAN, f64::NAN); LANDINGS];
     for (o, &scale) in out.iter_mut().zip(scales) {
-        let pc = [a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]];
-        let x = camera.fx * pc[0] / pc[2] + camera.cx;
-        let y = camera.fy * pc[1] / pc[2] + camera.cy;
-        let inside = pc[2] > 1e-6 && x >= 0.0 && y >= 0.0 && x < w && y < h;
-        *o = if inside { (x, y) } else { (f64::NAN, f64::NAN) };
+        let (x, y, lands) =
+            camera.camera_point_landing([a[0] + scale * b[0], a[1] + scale * b[1], a[2] + scale * b[2]]);
+        *o = if lands { (x, y) } else { (f64::NAN, f64::NAN) };
     }
     out
 }
