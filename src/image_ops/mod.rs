@@ -54,8 +54,9 @@ pub fn bounding_box(mask: &[bool], w: usize) -> Option<Rect> {
     mask.iter().enumerate().filter(|(_, &m)| m).fold(None, |r, (i, _)| Some(including(r, i % w, i / w)))
 }
 
-/// Copies a rectangle out of a planar image.
-pub fn crop(src: &[f32], w: usize, h: usize, channels: usize, r: Rect) -> Vec<f32> {
+/// Copies a rectangle out of a planar image (`channels` planes of `w` x `h`), or out of a mask or
+/// label map with `channels` 1.
+pub fn crop<T: Copy>(src: &[T], w: usize, h: usize, channels: usize, r: Rect) -> Vec<T> {
     let mut out = Vec::with_capacity(r.width() * r.height() * channels);
     for c in 0..channels {
         for y in r.y0..r.y1 {
@@ -156,7 +157,7 @@ pub fn distance_within(mask: &[bool], w: usize, h: usize, radius: f32) -> Vec<f3
     let reach = radius.max(0.0).ceil() as usize + 1;
     let win = b.grown(reach, reach, w, h);
     let (ww, wh) = (win.width(), win.height());
-    let local: Vec<bool> = (0..ww * wh).map(|k| mask[win.pixel(k, w)]).collect();
+    let local = crop(mask, w, h, 1, win);
     for (k, d) in distance_to(&local, ww, wh).into_iter().enumerate() {
         if d <= radius {
             out[win.pixel(k, w)] = d;
@@ -250,7 +251,7 @@ pub fn masked_box_mean(img: &[f32], mask: &[bool], w: usize, h: usize, channels:
     let Some(b) = bounding_box(mask, w) else { return out };
     let win = b.grown(r, r, w, h);
     let (ww, wh, wn) = (win.width(), win.height(), win.width() * win.height());
-    let local_mask: Vec<bool> = (0..wn).map(|k| mask[win.pixel(k, w)]).collect();
+    let local_mask = crop(mask, w, h, 1, win);
     let mut masked = crop(img, w, h, channels, win);
     masked.iter_mut().enumerate().filter(|(i, _)| !local_mask[i % wn]).for_each(|(_, v)| *v = 0.0);
     let (sums, counts) = (box_sum(&masked, ww, wh, channels, r), box_count(&local_mask, ww, wh, r));

@@ -317,10 +317,10 @@ impl ExemplarFill {
             w: cw,
             h: ch,
             image: crop(image, w, h, 3, win),
-            hole: (0..cw * ch).map(|k| fill[at(k)]).collect(),
-            avoid: (0..cw * ch).map(|k| avoid[at(k)]).collect(),
-            labels: (0..cw * ch).map(|k| labels[at(k)]).collect(),
-            disparity: disparity.map_or(Vec::new(), |d| (0..cw * ch).map(|k| d[at(k)]).collect()),
+            hole: crop(fill, w, h, 1, win),
+            avoid: crop(avoid, w, h, 1, win),
+            labels: crop(labels, w, h, 1, win),
+            disparity: disparity.map_or(Vec::new(), |d| crop(d, w, h, 1, win)),
         }];
         loop {
             let last = levels.last().unwrap();
