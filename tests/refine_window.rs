@@ -73,8 +73,9 @@ fn behind_camera(camera: &cogeo::scene::Camera, x: usize, y: usize) -> [f32; 3] 
 }
 
 /// The window is the bounding box of the hole and of the patch centres that land in the image,
-/// grown by the margin and clamped to the image; a centre behind the camera or outside the
-/// image does not count, and a view that sees neither has no window.
+/// grown by the margin, clamped to the image and widened to whole vec4s of the loss (to the
+/// right); a centre behind the camera or outside the image does not count, and a view that sees
+/// neither has no window.
 #[test]
 fn the_window_holds_the_hole_and_the_patch_the_view_sees() {
     let camera = test_camera(80, 60);
@@ -91,9 +92,9 @@ fn the_window_holds_the_hole_and_the_patch_the_view_sees() {
     assert_eq!((r.x0, r.y0, r.x1, r.y1), (25, 15, 45, 31));
     let patch = [at(50, 40), behind, outside];
     let r = refine_window(&camera, &hole, &patch, 5).unwrap();
-    assert_eq!((r.x0, r.y0, r.x1, r.y1), (25, 15, 56, 46));
+    assert_eq!((r.x0, r.y0, r.x1, r.y1), (25, 15, 57, 46), "31 pixels wide, widened to 32");
     let r = refine_window(&camera, &hole, &[at(2, 57)], 5).unwrap();
-    assert_eq!((r.x0, r.y0, r.x1, r.y1), (0, 15, 45, 60), "clamped to the image");
+    assert_eq!((r.x0, r.y0, r.x1, r.y1), (0, 15, 48, 60), "clamped to the image, widened to 48");
     assert!(refine_window(&camera, &vec![false; w * h], &[behind, outside], 5).is_none());
 }
 

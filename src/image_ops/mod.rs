@@ -39,6 +39,14 @@ impl Rect {
             y1: (self.y1 + my).min(h),
         }
     }
+
+    /// This rectangle widened to a multiple of `k` pixels (to the right, then to the left where
+    /// it meets the edge of a `w` pixels wide image), or as wide as the image where that is less.
+    pub fn widened_to_multiple(&self, k: usize, w: usize) -> Rect {
+        let width = self.width().next_multiple_of(k).min(w);
+        let x1 = (self.x0 + width).min(w);
+        Rect { x0: x1 - width, x1, ..*self }
+    }
 }
 
 /// The smallest rectangle holding `r` (if any) and pixel (x, y).
@@ -335,6 +343,24 @@ pub fn hstack_rgb8(images: &[&[f32]], w: usize, h: usize) -> (u32, u32, Vec<u8>)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn widened_rectangles_keep_their_pixels_and_stay_in_the_image() {
+        let w = 30;
+        for x0 in 0..w {
+            for x1 in x0 + 1..=w {
+                let r = Rect { x0, y0: 2, x1, y1: 5 };
+                let v = r.widened_to_multiple(4, w);
+                assert!(v.x0 <= x0 && v.x1 >= x1 && v.x1 <= w, "{r:?} -> {v:?}");
+                assert_eq!((v.y0, v.y1), (2, 5));
+                // a multiple of 4 where the image allows it, and no wider than needed
+                let want = (x1 - x0).div_ceil(4) * 4;
+                assert_eq!(v.width(), want.min(w), "{r:?} -> {v:?}");
+                // grown to the right first
+                assert_eq!(v.x0, x0.min(w - v.width()), "{r:?} -> {v:?}");
+            }
+        }
+    }
 
     #[test]
     fn box_sum_counts_the_window_cut_at_the_borders() {

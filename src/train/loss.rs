@@ -12,6 +12,8 @@ use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 
 pub const SSIM_LAMBDA: f32 = 0.2;
+/// The loss moves vec4s only for images whose width is a multiple of this (`Loss::vectorized`).
+pub const VECTOR_WIDTH: u32 = 4;
 const CHANNELS: u32 = 3;
 
 #[repr(C)]
@@ -196,7 +198,9 @@ impl PhotometricLoss {
         let mask = inputs.mask.map_or(0, |(b, offset, _)| b.address() + offset * 4);
         let scratch = [s.a.address(), s.b.address(), s.ssim_map.address(), s.l1_map.address(), s.dl_drgb.address()];
         let addresses = [inputs.render.address(), target, mask].into_iter().chain(scratch);
-        Ok(width.is_multiple_of(4) && self.run.is_multiple_of(4) && addresses.into_iter().all(|a| a.is_multiple_of(16)))
+        Ok(width.is_multiple_of(VECTOR_WIDTH)
+            && self.run.is_multiple_of(4)
+            && addresses.into_iter().all(|a| a.is_multiple_of(16)))
     }
 
     /// Records the loss gradient into `dl_drgb()` and the weighted per-pixel SSIM and L1 maps.
