@@ -7,7 +7,7 @@
 mod common;
 
 use cogeo::removal::complete::{Completer, CompletionConfig};
-use cogeo::removal::rendered_depth::{choose, PhotoCost, RenderedDepth};
+use cogeo::removal::rendered_depth::{choose, decisive, judged_views, PhotoCost, RenderedDepth, JUDGED_VIEWS};
 use cogeo::removal::{remove, RemoveOptions, Stages};
 use cogeo::scene::{logit, GaussianScene, SH_C0};
 use common::wall;
@@ -61,11 +61,23 @@ fn scene(wall_opacity: f32, extra: &[(f64, f32)]) -> (GaussianScene, Vec<u8>) {
     (scene, labels)
 }
 
-/// Removes the square with `depth`, without refinement (the completions are what is compared).
+/// Removes the square with `depth`, without refinement (the completions are what is compared),
+/// seen by the wall rig's four cameras.
 fn run(scene: &GaussianScene, labels: &[u8], depth: RenderedDepth) -> cogeo::removal::Removal {
-    let gpu = common::gpu();
     let rig = wall::Rig::new(W, H);
-    let views: Vec<(String, (u32, u32))> = rig.cams.iter().map(|c| (c.name.clone(), (c.width, c.height))).collect();
+    run_with(scene, labels, depth, &rig.cams, &rig.photos)
+}
+
+/// `run` seen by `cams`, their `photos`.
+fn run_with(
+    scene: &GaussianScene,
+    labels: &[u8],
+    depth: RenderedDepth,
+    cams: &[cogeo::scene::Camera],
+    photos: &[Vec<f32>],
+) -> cogeo::removal::Removal {
+    let gpu = common::gpu();
+    let views: Vec<(String, (u32, u32))> = cams.iter().map(|c| (c.name.clone(), (c.width, c.height))).collect();
     let completer = Completer::load(&gpu, &CompletionConfig::default(), 0, &views).unwrap();
     let opts = RemoveOptions {
         labels: vec![1],
@@ -73,7 +85,7 @@ fn run(scene: &GaussianScene, labels: &[u8], depth: RenderedDepth) -> cogeo::rem
         stages: Stages { refine: false, ..RemoveOptions::default().stages },
         ..Default::default()
     };
-    remove(&gpu, scene, labels, &rig.cams, &rig.photos, 5.0, &opts, &completer, &mut |_, _, _| {}).unwrap()
+    remove(&gpu, scene, labels, cams, photos, 5.0, &opts, &completer, &mut |_, _, _| {}).unwrap()
 }
 
 /// The target view's fill pixels' completed depth relative to the wall's: median and the share
@@ -192,4 +204,60 @@ fn masks_in_both_depths_are_the_masks_of_each() {
     let p = 10 * W + 10;
     let (e, m) = (expected[0].before.depth[p], median[0].before.depth[p]);
     assert!((m - 5.0).abs() < 0.05 && e < 4.7, "expected {e}, median {m}");
+}
+
+/// Twelve cameras at (x, y, 0) on a 4 x 3 grid, within 1.2 of the rig's target camera, and their
+/// photos of the wall.
+fn twelve_cameras() -> (Vec<cogeo::scene::Camera>, Vec<Vec<f32>>) {
+    let cams: Vec<_> = (0..12)
+        .map(|k| {
+            let (x, y) = (-1.2 + 0.8 * (k % 4) as f64, -0.8 + 0.8 * (k / 4) as f64);
+            wall::camera(&format!("v{k}"), W, H, x, y)
+        })
+        .collect();
+    let photos = wall::photos(&cams);
+    (cams, photos)
+}
+
+/// With more views than `JUDGED_VIEWS`, `Auto` completes the judged ones under both depths
+/// first. Where their costs part clearly (the veil) it completes the others under the chosen
+/// depth alone, and every view is what that depth forced gives it, bit for bit; where they do
+/// not (the bare wall, whose two depths agree) every view is completed under both and the
+/// costs pool them all, as the forced runs' do.
+#[test]
+fn the_judged_views_decide_only_where_their_costs_part_clearly() {
+    let (cams, photos) = twelve_cameras();
+    let veiled = scene(0.99, &[(3.6, 0.08)]);
+    let auto = run_with(&veiled.0, &veiled.1, RenderedDepth::Auto, &cams, &photos);
+    let choice = auto.report.rendered_depth.clone().expect("completion ran");
+    assert_eq!((choice.chosen, choice.judged_views), (RenderedDepth::Median, JUDGED_VIEWS), "{choice:?}");
+    assert!(decisive(choice.expected, choice.median), "{choice:?}");
+    assert_same_views(&auto, &run_with(&veiled.0, &veiled.1, RenderedDepth::Median, &cams, &photos));
+
+    let bare = scene(0.99, &[]);
+    let auto = run_with(&bare.0, &bare.1, RenderedDepth::Auto, &cams, &photos);
+    let choice = auto.report.rendered_depth.clone().expect("completion ran");
+    assert_eq!(choice.judged_views, cams.len(), "{choice:?}");
+    let forced = |depth| run_with(&bare.0, &bare.1, depth, &cams, &photos).report.rendered_depth.unwrap();
+    assert_eq!(choice.expected, forced(RenderedDepth::Expected).expected, "pooled over every view");
+    assert_eq!(choice.median, forced(RenderedDepth::Median).median, "pooled over every view");
+    let kept = if choice.chosen == RenderedDepth::Median { RenderedDepth::Median } else { RenderedDepth::Expected };
+    assert_same_views(&auto, &run_with(&bare.0, &bare.1, kept, &cams, &photos));
+}
+
+/// The judged views are the `JUDGED_VIEWS` largest holes (ties to the first view), in order; they
+/// decide at a cost ratio of `DECISIVE_RATIO` or less, and only with both depths scored.
+#[test]
+fn the_judged_views_are_the_largest_holes_and_decide_at_the_ratio() {
+    assert_eq!(JUDGED_VIEWS, 8);
+    let (judged, rest) = judged_views(&[5, 0, 9, 9, 1, 3, 7, 2, 8, 4, 2]);
+    assert_eq!(judged, vec![0, 2, 3, 5, 6, 7, 8, 9], "idx 7 before idx 10 of the same size");
+    assert_eq!(rest, vec![1, 4, 10]);
+    let (judged, rest) = judged_views(&[3, 1, 2]);
+    assert_eq!((judged, rest), (vec![0, 1, 2], vec![]));
+    let cost = |cost| Some(PhotoCost { cost, pixels: 10 });
+    let ratio = cogeo::removal::rendered_depth::DECISIVE_RATIO;
+    assert!(decisive(cost(1.0), cost(ratio)) && decisive(cost(ratio), cost(1.0)));
+    assert!(!decisive(cost(1.0), cost(ratio + 1e-9)) && !decisive(cost(ratio + 1e-9), cost(1.0)));
+    assert!(!decisive(None, cost(0.001)) && !decisive(cost(0.001), None));
 }

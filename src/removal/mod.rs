@@ -279,18 +279,20 @@ fn check_inputs(
     Ok(())
 }
 
-/// Stage 3 over every view.
+/// Stage 3 over the views `at` (the others keep what they have).
 fn complete_views(
     views: &mut [EditedView],
+    at: &[usize],
     completer: &Completer,
     transfer_follows: bool,
     progress: Progress,
 ) -> Result<()> {
-    let inputs: Vec<ViewInputs> = views.iter().map(|v| v.completion_inputs()).collect();
-    let completed = completer.complete_views(&inputs, transfer_follows, &mut |d, t| progress("complete", d, t))?;
+    let inputs: Vec<ViewInputs> = at.iter().map(|&i| views[i].completion_inputs()).collect();
+    let completed =
+        completer.complete_views_at(&inputs, at, transfer_follows, &mut |d, t| progress("complete", d, t))?;
     drop(inputs);
-    for (v, k) in views.iter_mut().zip(completed) {
-        v.set_completed(k);
+    for (&i, k) in at.iter().zip(completed) {
+        views[i].set_completed(k);
     }
     Ok(())
 }
@@ -311,17 +313,24 @@ fn sources_and_holes<'v>(views: &'v [EditedView]) -> (Vec<SourceView<'v>>, Vec<&
     views.iter().map(|v| (v.source().expect("photos were given"), v.masked.hole.as_slice())).unzip()
 }
 
-/// Stage 3b over every view (`cameras`, the views' own; needs the photos).
-fn correct_depths(views: &mut [EditedView], cameras: &[Camera], completer: &Completer, progress: Progress) {
+/// Stage 3b over the views `at`, completed (`cameras`: every view's; needs the photos).
+fn correct_depths(
+    views: &mut [EditedView],
+    at: &[usize],
+    cameras: &[Camera],
+    completer: &Completer,
+    progress: Progress,
+) {
     let leftovers: Vec<Vec<f32>> = views.iter().map(|v| v.masked.leftover_depth()).collect();
-    let mut completed = take_completions(views);
+    let mut completed: Vec<Completed> = at.iter().map(|&i| views[i].completed.take().expect("stage 3 ran")).collect();
     let (sources, holes) = sources_and_holes(views);
-    let found = completer.correct_depths(cameras, &sources, &holes, &leftovers, &mut completed, &mut |d, t| {
+    let found = completer.correct_depths(cameras, &sources, &holes, &leftovers, at, &mut completed, &mut |d, t| {
         progress("photo depth", d, t)
     });
     drop((sources, holes));
-    put_back(views, completed);
-    for (v, (scale, taken)) in views.iter_mut().zip(found) {
+    for ((&i, k), (scale, taken)) in at.iter().zip(completed).zip(found) {
+        let v = &mut views[i];
+        v.completed = Some(k);
         v.report.hole_depth_scale = Some(scale);
         v.report.leftover_depth_pixels = Some(taken);
     }

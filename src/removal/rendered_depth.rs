@@ -17,7 +17,10 @@
 //! `Auto` runs stages 2 to 3b under both (the hull too judges in the depth the views read: in the
 //! expected depth the median's completions on statue-two-of-three scored 0.00202, not 0.00162)
 //! and keeps the one with the lower mean cost, weighted by the pixels it scored; it needs the
-//! photos and the photo-consistent hole depth.
+//! photos and the photo-consistent hole depth. Stages 3 and 3b run first on the views with the
+//! largest holes (`judged_views`); where those decide (`decisive`), the other views are completed
+//! under the chosen depth alone. Each view's completion depends on that view alone, so the
+//! views kept are those a forced run of the chosen depth gives.
 
 use super::complete::Completer;
 use super::report::StageClock;
@@ -51,6 +54,8 @@ pub struct DepthChoice {
     /// two views saw).
     pub expected: Option<PhotoCost>,
     pub median: Option<PhotoCost>,
+    /// The views the costs pool (`judged_views`; every view where the judged ones did not decide).
+    pub judged_views: usize,
     /// Why `Auto` did not compare both, or why the median depth dropped out.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
@@ -87,10 +92,45 @@ pub fn choose(expected: Option<PhotoCost>, median: Option<PhotoCost>) -> Rendere
     }
 }
 
+/// The views `Auto` completes under both depths first: those with the most hole pixels, which
+/// weigh the most in the pooled cost (`PhotoCost::of`). Where their costs part clearly
+/// (`DECISIVE_RATIO`) the other views are completed under the chosen depth only: on the speed
+/// bench's statue (25 views) that leaves out the losing depth's completion and photo depth of 17
+/// views, on the cups (67 views) of 59.
+pub const JUDGED_VIEWS: usize = 8;
+
+/// The judged views decide when the lower cost is at most this share of the higher. On the
+/// real-photo bench the eight views' costs stood at 0.84 of each other (statue-one, whose 25
+/// views pool to 0.99), 0.47 (statue-two-of-three; 0.91 pooled), 0.79 and 0.46 (the cups; 0.66
+/// and 0.68 pooled) and 0.71 on the speed bench's statue (0.76 pooled): each the side of all its
+/// views (bench/JOURNAL.md, 2026-12-03). Where they do not decide, every view is completed under
+/// both and the choice is the one of all the views.
+pub const DECISIVE_RATIO: f64 = 0.8;
+
+/// Whether the costs of the judged views decide the choice (`DECISIVE_RATIO`).
+pub fn decisive(expected: Option<PhotoCost>, median: Option<PhotoCost>) -> bool {
+    match (expected, median) {
+        (Some(e), Some(m)) => e.cost.min(m.cost) <= DECISIVE_RATIO * e.cost.max(m.cost),
+        _ => false,
+    }
+}
+
+/// The `JUDGED_VIEWS` views of `holes` (each view's hole pixels) with the most hole pixels, in
+/// their order, and the other views.
+pub fn judged_views(holes: &[usize]) -> (Vec<usize>, Vec<usize>) {
+    let mut by_size: Vec<usize> = (0..holes.len()).collect();
+    by_size.sort_by_key(|&i| (std::cmp::Reverse(holes[i]), i));
+    let mut judged = vec![false; holes.len()];
+    for &i in by_size.iter().take(JUDGED_VIEWS) {
+        judged[i] = true;
+    }
+    (0..holes.len()).partition(|&i| judged[i])
+}
+
 /// Stages 2 to 3b of `remove` for `selection` under the rendered depth `--rendered-depth` names,
 /// or under both for `Auto` where the photos and the photo-consistent hole depth can judge them
-/// (the masks of both then from one render of each view): the views of the one kept, and the
-/// choice.
+/// (the masks of both then from one render of each view; the judged views completed under both
+/// first, `judged_views`): the views of the one kept, and the choice.
 pub(super) fn stage_in_chosen_depth<'a>(
     inputs: &StageInputs<'a>,
     selection: &Selection,
@@ -100,73 +140,87 @@ pub(super) fn stage_in_chosen_depth<'a>(
     let opts = inputs.opts;
     let photo_depth = opts.stages.complete && inputs.photo_depth_runs();
     let wanted = if opts.stages.complete { opts.rendered_depth } else { RenderedDepth::Expected };
-    let both = wanted == RenderedDepth::Auto && photo_depth;
-    let mut median_masks = None;
-    run_in_chosen_depth(
-        wanted,
-        photo_depth,
-        &mut |median_depth, progress| {
-            let masked = match median_masks.take() {
-                Some(masked) if median_depth => masked,
-                _ => {
-                    let (masked, median) = draw_masks(inputs, selection, median_depth, both, progress)?;
-                    median_masks = median;
-                    masked
-                }
-            };
-            clock.lap("masks");
-            stage_views(inputs, selection.clone(), masked, median_depth, clock, progress)
-        },
-        progress,
-    )
-}
-
-/// Stages 2 to 3b (`run`, given whether to read the median depth) under the rendered depth
-/// `wanted` names, or under both for `Auto` where `photo_depth` (the photos and the
-/// photo-consistent hole depth) can judge them; the views of the one kept, and the choice.
-fn run_in_chosen_depth<'a>(
-    wanted: RenderedDepth,
-    photo_depth: bool,
-    run: &mut dyn FnMut(bool, Progress) -> Result<Staged<'a>>,
-    progress: Progress,
-) -> Result<(Staged<'a>, DepthChoice)> {
-    let cost = |staged: &Staged| PhotoCost::of(staged.views.iter().map(|v| &v.report));
-    let choice = |chosen, expected, median, note: Option<&str>| DepthChoice {
+    let all: Vec<usize> = (0..inputs.cameras.len()).collect();
+    let cost = |staged: &Staged, at: &[usize]| PhotoCost::of(at.iter().map(|&i| &staged.views[i].report));
+    let choice = |chosen, expected, median, judged, note: Option<&str>| DepthChoice {
         chosen,
         expected,
         median,
+        judged_views: judged,
         note: note.map(str::to_string),
     };
-    match wanted {
-        RenderedDepth::Expected | RenderedDepth::Median => {
-            let staged = run(wanted == RenderedDepth::Median, progress)?;
-            let c = cost(&staged);
-            let (expected, median) = if wanted == RenderedDepth::Median { (None, c) } else { (c, None) };
-            Ok((staged, choice(wanted, expected, median, None)))
-        }
-        RenderedDepth::Auto if !photo_depth => {
-            let staged = run(false, progress)?;
-            let note = "no photos or no photo-consistent hole depth to judge by: the expected depth";
-            Ok((staged, choice(RenderedDepth::Expected, None, None, Some(note))))
-        }
-        RenderedDepth::Auto => {
-            let by_expected = run(false, progress)?;
-            let expected = cost(&by_expected);
-            match run(true, progress) {
-                Ok(by_median) => {
-                    let median = cost(&by_median);
-                    let chosen = choose(expected, median);
-                    let staged = if chosen == RenderedDepth::Median { by_median } else { by_expected };
-                    Ok((staged, choice(chosen, expected, median, None)))
-                }
-                // the expected depth's views stand; the median depth's failure is the report's
-                Err(e) => {
-                    let note = format!("the median depth failed, the expected depth kept: {e:#}");
-                    Ok((by_expected, choice(RenderedDepth::Expected, expected, None, Some(&note))))
-                }
+    if wanted != RenderedDepth::Auto || !photo_depth {
+        let median = wanted == RenderedDepth::Median;
+        let (masked, _) = draw_masks(inputs, selection, median, false, progress)?;
+        clock.lap("masks");
+        let mut staged = hull_views(inputs, selection.clone(), masked, median, clock, progress)?;
+        complete_views_at(inputs, &mut staged, &all, median, clock, progress)?;
+        let c = cost(&staged, &all);
+        let n = all.len();
+        return Ok(match wanted {
+            RenderedDepth::Median => (staged, choice(wanted, None, c, n, None)),
+            RenderedDepth::Expected => (staged, choice(wanted, c, None, n, None)),
+            RenderedDepth::Auto => {
+                let note = "no photos or no photo-consistent hole depth to judge by: the expected depth";
+                (staged, choice(RenderedDepth::Expected, None, None, 0, Some(note)))
             }
-        }
+        });
     }
+    let (masked, median_masked) = draw_masks(inputs, selection, false, true, progress)?;
+    clock.lap("masks");
+    let mut by_expected = hull_views(inputs, selection.clone(), masked, false, clock, progress)?;
+    let holes: Vec<usize> = by_expected.views.iter().map(|v| v.masked.hole.iter().filter(|&&h| h).count()).collect();
+    let (judged, rest) = judged_views(&holes);
+    complete_views_at(inputs, &mut by_expected, &judged, false, clock, progress)?;
+    let median_masked = median_masked.expect("drawn in both depths");
+    let by_median = hull_views(inputs, selection.clone(), median_masked, true, clock, progress).and_then(|mut s| {
+        complete_views_at(inputs, &mut s, &judged, true, clock, progress)?;
+        Ok(s)
+    });
+    let mut by_median = match by_median {
+        Ok(s) => s,
+        // the expected depth's views stand; the median depth's failure is the report's
+        Err(e) => return median_failed(inputs, by_expected, &judged, &rest, e, clock, progress),
+    };
+    let (mut expected, mut median) = (cost(&by_expected, &judged), cost(&by_median, &judged));
+    let mut judged_count = judged.len();
+    if !rest.is_empty() && !decisive(expected, median) {
+        complete_views_at(inputs, &mut by_expected, &rest, false, clock, progress)?;
+        if let Err(e) = complete_views_at(inputs, &mut by_median, &rest, true, clock, progress) {
+            return median_failed(inputs, by_expected, &all, &[], e, clock, progress);
+        }
+        (expected, median, judged_count) = (cost(&by_expected, &all), cost(&by_median, &all), all.len());
+    }
+    let chosen = choose(expected, median);
+    let mut staged = if chosen == RenderedDepth::Median { by_median } else { by_expected };
+    if judged_count < all.len() {
+        complete_views_at(inputs, &mut staged, &rest, chosen == RenderedDepth::Median, clock, progress)?;
+    }
+    Ok((staged, choice(chosen, expected, median, judged_count, None)))
+}
+
+/// `Auto`'s expected depth kept after the median depth failed with `error`: its views `rest`
+/// completed too (`judged` were), and the choice that says so.
+fn median_failed<'a>(
+    inputs: &StageInputs<'a>,
+    mut by_expected: Staged<'a>,
+    judged: &[usize],
+    rest: &[usize],
+    error: anyhow::Error,
+    clock: &mut StageClock,
+    progress: Progress,
+) -> Result<(Staged<'a>, DepthChoice)> {
+    complete_views_at(inputs, &mut by_expected, rest, false, clock, progress)?;
+    let expected = PhotoCost::of(judged.iter().chain(rest).map(|&i| &by_expected.views[i].report));
+    let note = format!("the median depth failed, the expected depth kept: {error:#}");
+    let choice = DepthChoice {
+        chosen: RenderedDepth::Expected,
+        expected,
+        median: None,
+        judged_views: judged.len() + rest.len(),
+        note: Some(note),
+    };
+    Ok((by_expected, choice))
 }
 
 /// What stages 2 to 3b read: `remove`'s arguments.
@@ -232,11 +286,11 @@ fn hole_config(opts: &RemoveOptions, median_depth: bool) -> HoleConfig {
     }
 }
 
-/// Stages 1b to 3b on the views stage 2 `masked` for `selection`, every render's depth the
-/// median one (`median_depth`) or the expected one: the Gaussians left inside the objects (which
-/// go with them, `selection` grows), then (unless removal only) completion and the
-/// photo-consistent hole depth.
-fn stage_views<'a>(
+/// Stage 1b on the views stage 2 `masked` for `selection`, every render's depth the median one
+/// (`median_depth`) or the expected one: the Gaussians left inside the objects go with them
+/// (`selection` grows) and the holes are drawn again without them. No view is completed yet
+/// (`complete_views_at`).
+fn hull_views<'a>(
     inputs: &StageInputs<'a>,
     mut selection: Selection,
     mut masked: Vec<MaskedView>,
@@ -244,16 +298,10 @@ fn stage_views<'a>(
     clock: &mut StageClock,
     progress: Progress,
 ) -> Result<Staged<'a>> {
-    let StageInputs { gpu, scene, labels, cameras, photos, opts, completer } = *inputs;
-    // `Auto` runs these stages twice: the second run's progress says which depth it reads
-    let mut labelled = |stage: &str, done, total| match median_depth {
-        true => progress(&format!("{stage} (median depth)"), done, total),
-        false => progress(stage, done, total),
-    };
+    let StageInputs { gpu, scene, labels, cameras, photos, opts, .. } = *inputs;
+    let mut labelled = in_depth(median_depth, progress);
     let progress: Progress = &mut labelled;
     let holes = hole_config(opts, median_depth);
-    // 1b. the background Gaussians the tagging left inside the objects go too (and the holes are
-    // drawn again without them)
     let left_inside = hull::remove_leftovers_inside(
         gpu,
         scene,
@@ -267,19 +315,46 @@ fn stage_views<'a>(
         &mut |d, t| progress("hull", d, t),
     )?;
     clock.lap("hull");
-    let mut views: Vec<EditedView> = masked
+    let views: Vec<EditedView> = masked
         .into_iter()
         .enumerate()
         .map(|(i, m)| EditedView::new(&cameras[i], photos.get(i).map(|p| p.as_slice()), m))
         .collect();
-    if opts.stages.complete {
-        // 3. completion, 3b. the hole depth the captured photos agree on
-        complete_views(&mut views, completer, !photos.is_empty() && opts.stages.transfer, progress)?;
-        clock.lap("complete");
-        if inputs.photo_depth_runs() {
-            correct_depths(&mut views, cameras, completer, progress);
-            clock.lap("photo_depth");
-        }
-    }
     Ok(Staged { views, selection, left_inside })
+}
+
+/// Stages 3 and 3b (unless removal only) on the views `at` of `staged`: completion and the
+/// photo-consistent hole depth, in the depth the views' renders hold (`median_depth` says which,
+/// for the progress). Each view's result depends on that view alone, whichever others run with it.
+fn complete_views_at(
+    inputs: &StageInputs,
+    staged: &mut Staged,
+    at: &[usize],
+    median_depth: bool,
+    clock: &mut StageClock,
+    progress: Progress,
+) -> Result<()> {
+    let StageInputs { cameras, photos, opts, completer, .. } = *inputs;
+    if !opts.stages.complete || at.is_empty() {
+        return Ok(());
+    }
+    let mut labelled = in_depth(median_depth, progress);
+    let progress: Progress = &mut labelled;
+    // 3. completion, 3b. the hole depth the captured photos agree on
+    let transfer_follows = !photos.is_empty() && opts.stages.transfer;
+    complete_views(&mut staged.views, at, completer, transfer_follows, progress)?;
+    clock.lap("complete");
+    if inputs.photo_depth_runs() {
+        correct_depths(&mut staged.views, at, cameras, completer, progress);
+        clock.lap("photo_depth");
+    }
+    Ok(())
+}
+
+/// `progress` that says which depth a stage reads: `Auto` runs stages 1b to 3b under both.
+fn in_depth(median_depth: bool, progress: Progress<'_>) -> impl FnMut(&str, usize, usize) + '_ {
+    move |stage: &str, done, total| match median_depth {
+        true => progress(&format!("{stage} (median depth)"), done, total),
+        false => progress(stage, done, total),
+    }
 }

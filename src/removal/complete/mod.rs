@@ -300,9 +300,23 @@ impl Completer {
         transfer_follows: bool,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Vec<Completed>> {
-        let complete = |i: usize| {
-            let v = &views[i];
-            self.complete_view(v, i, transfer_follows).with_context(|| format!("completing view {}", v.name))
+        let at: Vec<usize> = (0..views.len()).collect();
+        self.complete_views_at(views, &at, transfer_follows, progress)
+    }
+
+    /// `complete_views` of some of the views: `views[k]` is view `at[k]`, which gets that index
+    /// (so its result is the one it gets among all the views).
+    pub fn complete_views_at(
+        &self,
+        views: &[ViewInputs],
+        at: &[usize],
+        transfer_follows: bool,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Vec<Completed>> {
+        assert_eq!(views.len(), at.len(), "an index per view");
+        let complete = |k: usize| {
+            let v = &views[k];
+            self.complete_view(v, at[k], transfer_follows).with_context(|| format!("completing view {}", v.name))
         };
         if !self.host_only(transfer_follows) {
             let mut out = Vec::with_capacity(views.len());
@@ -336,22 +350,26 @@ impl Completer {
     /// the whole `hole` is corrected so that the other views' photos (`sources`, one per view)
     /// agree on its colors (`photo_depth`). It runs before the color transfer and the fusion, and
     /// without the transfer too, since both place points by this depth. Views are independent
-    /// (the sources hold the original renders), so they run on all cores. Returns per view the
-    /// factor found and the pixels that took the leftover depth. The pipeline calls it when
-    /// `photo_depth` is set.
+    /// (the sources hold the original renders), so they run on all cores; `completed[k]` is view
+    /// `at[k]`'s (`cameras`, `sources`, `holes` and `leftovers` hold every view). Returns per
+    /// completed view the factor found and the pixels that took the leftover depth. The pipeline
+    /// calls it when `photo_depth` is set.
     pub fn correct_depths(
         &self,
         cameras: &[Camera],
         sources: &[SourceView],
         holes: &[&[bool]],
         leftovers: &[Vec<f32>],
+        at: &[usize],
         completed: &mut [Completed],
         progress: &mut dyn FnMut(usize, usize),
     ) -> Vec<(DepthScale, usize)> {
+        assert_eq!(completed.len(), at.len(), "an index per completed view");
         let mut views: Vec<(&mut Completed, (DepthScale, usize))> =
             completed.iter_mut().map(|c| (c, (DepthScale::unchanged(), 0))).collect();
         let photos: Vec<Vec<[f32; 3]>> = sources.iter().map(|s| interleave_rgb(s.photo, s.photo.len() / 3)).collect();
-        for_each_item(&mut views, progress, |i, (c, (scale, taken))| {
+        for_each_item(&mut views, progress, |k, (c, (scale, taken))| {
+            let i = at[k];
             *taken = prefer_leftover_depth(i, &cameras[i], c, &leftovers[i], sources, &photos, PHOTO_DEPTH_TOLERANCE);
             let (depth, hole) = (&mut c.depth, holes[i]);
             *scale = correct_hole_depth(i, &cameras[i], depth, hole, sources, &photos, PHOTO_DEPTH_TOLERANCE);
