@@ -101,10 +101,11 @@ pub const JUDGED_VIEWS: usize = 8;
 
 /// The judged views decide when the lower cost is at most this share of the higher. On the
 /// real-photo bench the eight views' costs stood at 0.84 of each other (statue-one, whose 25
-/// views pool to 0.99), 0.47 (statue-two-of-three; 0.91 pooled), 0.79 and 0.46 (the cups; 0.66
-/// and 0.68 pooled) and 0.71 on the speed bench's statue (0.76 pooled): each the side of all its
-/// views (bench/JOURNAL.md, 2026-12-03). Where they do not decide, every view is completed under
-/// both and the choice is the one of all the views.
+/// views pool to 0.99), 0.47 (statue-two-of-three; 0.88 pooled), 0.79 and 0.46 (the cups; 0.70
+/// and 0.65 pooled) and 0.71 on the speed bench's statue (0.76 pooled), each on the side of all
+/// its views, but at 0.85 statue-one's eight would have chosen the median depth where its 25
+/// choose the expected one (bench/JOURNAL.md, 2026-12-03, 08:33). Where they do not decide,
+/// every view is completed under both and the choice is the one of all the views.
 pub const DECISIVE_RATIO: f64 = 0.8;
 
 /// Whether the costs of the judged views decide the choice (`DECISIVE_RATIO`).
