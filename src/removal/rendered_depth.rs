@@ -54,7 +54,8 @@ pub struct DepthChoice {
     /// two views saw).
     pub expected: Option<PhotoCost>,
     pub median: Option<PhotoCost>,
-    /// The views the costs pool (`judged_views`; every view where the judged ones did not decide).
+    /// The views the costs pool (`judged_views`; every view where the judged ones did not decide,
+    /// or a depth was forced; none where no cost was measured).
     pub judged_views: usize,
     /// Why `Auto` did not compare both, or why the median depth dropped out.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -157,7 +158,7 @@ pub(super) fn stage_in_chosen_depth<'a>(
         let mut staged = hull_views(inputs, selection.clone(), masked, median, clock, progress)?;
         complete_views_at(inputs, &mut staged, &all, median, clock, progress)?;
         let c = cost(&staged, &all);
-        let n = all.len();
+        let n = if c.is_some() { all.len() } else { 0 };
         return Ok(match wanted {
             RenderedDepth::Median => (staged, choice(wanted, None, c, n, None)),
             RenderedDepth::Expected => (staged, choice(wanted, c, None, n, None)),
