@@ -322,13 +322,14 @@ fn correct_depths(
     progress: Progress,
 ) {
     let leftovers: Vec<Vec<f32>> = views.iter().map(|v| v.masked.leftover_depth()).collect();
-    let mut completed: Vec<Completed> = at.iter().map(|&i| views[i].completed.take().expect("stage 3 ran")).collect();
+    let mut completed: Vec<(usize, Completed)> =
+        at.iter().map(|&i| (i, views[i].completed.take().expect("stage 3 ran"))).collect();
     let (sources, holes) = sources_and_holes(views);
-    let found = completer.correct_depths(cameras, &sources, &holes, &leftovers, at, &mut completed, &mut |d, t| {
+    let found = completer.correct_depths(cameras, &sources, &holes, &leftovers, &mut completed, &mut |d, t| {
         progress("photo depth", d, t)
     });
     drop((sources, holes));
-    for ((&i, k), (scale, taken)) in at.iter().zip(completed).zip(found) {
+    for ((i, k), (scale, taken)) in completed.into_iter().zip(found) {
         let v = &mut views[i];
         v.completed = Some(k);
         v.report.hole_depth_scale = Some(scale);

@@ -350,31 +350,29 @@ impl Completer {
     /// the whole `hole` is corrected so that the other views' photos (`sources`, one per view)
     /// agree on its colors (`photo_depth`). It runs before the color transfer and the fusion, and
     /// without the transfer too, since both place points by this depth. Views are independent
-    /// (the sources hold the original renders), so they run on all cores; `completed[k]` is view
-    /// `at[k]`'s (`cameras`, `sources`, `holes` and `leftovers` hold every view). Returns per
-    /// completed view the factor found and the pixels that took the leftover depth. The pipeline
-    /// calls it when `photo_depth` is set.
+    /// (the sources hold the original renders), so they run on all cores; `completed` holds some
+    /// of the views, each with its index (`cameras`, `sources`, `holes` and `leftovers` hold
+    /// every view). Returns per completed view the factor found and the pixels that took the
+    /// leftover depth. The pipeline calls it when `photo_depth` is set.
     pub fn correct_depths(
         &self,
         cameras: &[Camera],
         sources: &[SourceView],
         holes: &[&[bool]],
         leftovers: &[Vec<f32>],
-        at: &[usize],
-        completed: &mut [Completed],
+        completed: &mut [(usize, Completed)],
         progress: &mut dyn FnMut(usize, usize),
     ) -> Vec<(DepthScale, usize)> {
-        assert_eq!(completed.len(), at.len(), "an index per completed view");
-        let mut views: Vec<(&mut Completed, (DepthScale, usize))> =
-            completed.iter_mut().map(|c| (c, (DepthScale::unchanged(), 0))).collect();
+        let mut views: Vec<(usize, &mut Completed, (DepthScale, usize))> =
+            completed.iter_mut().map(|(i, c)| (*i, c, (DepthScale::unchanged(), 0))).collect();
         let photos: Vec<Vec<[f32; 3]>> = sources.iter().map(|s| interleave_rgb(s.photo, s.photo.len() / 3)).collect();
-        for_each_item(&mut views, progress, |k, (c, (scale, taken))| {
-            let i = at[k];
+        for_each_item(&mut views, progress, |_, (i, c, (scale, taken))| {
+            let i = *i;
             *taken = prefer_leftover_depth(i, &cameras[i], c, &leftovers[i], sources, &photos, PHOTO_DEPTH_TOLERANCE);
             let (depth, hole) = (&mut c.depth, holes[i]);
             *scale = correct_hole_depth(i, &cameras[i], depth, hole, sources, &photos, PHOTO_DEPTH_TOLERANCE);
         });
-        views.into_iter().map(|(_, found)| found).collect()
+        views.into_iter().map(|(_, _, found)| found).collect()
     }
 
     /// Stage 3c, depth-guided color transfer over the whole `hole` of every view (covered pixels
