@@ -12,7 +12,7 @@ use anyhow::{bail, Result};
 use bytemuck::{Pod, Zeroable};
 
 pub const SSIM_LAMBDA: f32 = 0.2;
-/// The loss moves vec4s only for images whose width is a multiple of this (`Loss::vectorized`).
+/// The loss moves vec4s only for images whose width is a multiple of this (`PhotometricLoss::vectorized`).
 pub const VECTOR_WIDTH: u32 = 4;
 const CHANNELS: u32 = 3;
 
