@@ -77,6 +77,37 @@ impl SceneBuffers {
             features: features.map(|f| f.0),
         })
     }
+
+    /// Puts `scene` (and `features`, N x D) in these buffers in place of the scene they hold: each
+    /// attribute into its buffer where it fits, else into a new one half again as large, so that a
+    /// run of parts of one scene (`SceneRenderer::upload`) soon stops allocating.
+    pub fn reload(&mut self, gpu: &Gpu, scene: &GaussianScene, features: Option<(&[f32], usize)>) -> Result<()> {
+        fn fill<T: bytemuck::Pod>(gpu: &Gpu, buffer: &mut Buffer, name: &str, data: &[T]) -> Result<()> {
+            let bytes = std::mem::size_of_val(data) as u64;
+            if bytes > buffer.size() {
+                *buffer = Buffer::new(gpu, name, bytes + bytes / 2, MemoryKind::Device)?;
+            }
+            buffer.upload(gpu, data)
+        }
+        let n = scene.len();
+        fill(gpu, &mut self.means, "means", &scene.means)?;
+        fill(gpu, &mut self.log_scales, "log_scales", &scene.log_scales)?;
+        fill(gpu, &mut self.quats, "quats", &scene.quats)?;
+        fill(gpu, &mut self.opacity_logits, "opacity_logits", &scene.opacity_logits)?;
+        fill(gpu, &mut self.sh, "sh", &scene.sh)?;
+        if let Some((f, d)) = features {
+            assert_eq!(f.len(), n * d, "feature matrix must be N x D");
+        }
+        match (features, &mut self.features) {
+            (Some((f, _)), Some(buffer)) => fill(gpu, buffer, "features", f)?,
+            (Some((f, _)), none) => *none = Some(Buffer::from_slice(gpu, "features", f)?),
+            (None, features) => *features = None,
+        }
+        self.num_gaussians = n as u32;
+        self.sh_degree = scene.sh_degree;
+        self.feature_dim = features.map_or(0, |f| f.1 as u32);
+        Ok(())
+    }
 }
 
 /// Per-render options.
