@@ -2,7 +2,7 @@
 //! kept training reused), each variant removed and scored, a row per variant.
 
 use crate::common::{self, cogeo, read_json, s};
-use crate::{CAPTURE_CEILING, DISAGREEING, DISAGREEING_SEEDS, ONE_SOURCE, PERFECT_INPAINTING};
+use crate::{CAPTURE_CEILING, DISAGREEING, DISAGREEING_ROTATIONS, DISAGREEING_SEEDS, ONE_SOURCE, PERFECT_INPAINTING};
 use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -31,7 +31,7 @@ pub struct Training<'a> {
 
 impl Training<'_> {
     /// A folder of completed views for `--inpainted`, view by view from the `--no-refine` runs of
-    /// the built-in fill with `seeds` (view i from seed i mod their count, in name order). The runs
+    /// the built-in fill with `seeds` (view i, in name order, from `seeds[i % seeds.len()]`). The runs
     /// are kept in `dir` for the next variant.
     fn seed_inpaintings(&self, dir: &Path, tagged: &Path, seeds: &[u64]) -> PathBuf {
         let capture = Capture::at(self.data);
@@ -189,10 +189,10 @@ impl Training<'_> {
             }
             let tagged = dir.join(format!("tagged_{method}.ply"));
             // the one-source variant runs once per seed, each seed's fill a consistent source of its
-            // own; the others once
+            // own, the disagreeing one once per rotation of the seeds over the views; the others once
             let sources: Vec<Option<&[u64]>> = match *variant {
                 ONE_SOURCE => DISAGREEING_SEEDS.iter().map(|seed| Some(std::slice::from_ref(seed))).collect(),
-                DISAGREEING => vec![Some(&DISAGREEING_SEEDS[..])],
+                DISAGREEING => DISAGREEING_ROTATIONS.iter().map(|r| Some(&r[..])).collect(),
                 _ => vec![None],
             };
             let mut runs = Vec::new();
@@ -233,12 +233,12 @@ fn seeds_of(sources: &[Option<&[u64]>]) -> Vec<Value> {
     sources.iter().map(|s| s.map_or(Value::Null, |s| json!(s))).collect()
 }
 
-/// A variant's row: its one run, or of several runs (the one-source variant, a run per seed) the
-/// one of median masked LPIPS, with every run's seeds, masked PSNR and LPIPS beside it
-/// (`single_source_runs`): one seed's fill can be luckier than another's by more than the
-/// disagreeing inpaintings' yardstick allows (statue-two-of-three, seeds 0-3: masked LPIPS 0.210
-/// / 0.199 / 0.225 / 0.204), so the yardstick compares with the typical single source, not with
-/// one seed's.
+/// A variant's row: its one run, or of several runs (the one-source variant, a run per seed; the
+/// disagreeing one, a run per rotation of the seeds) the one of median masked LPIPS, with every
+/// run's seeds, masked PSNR and LPIPS beside it (`runs`): one seed's fill can be luckier than
+/// another's by more than the disagreeing inpaintings' yardstick allows (statue-two-of-three,
+/// seeds 0-3: masked LPIPS 0.210 / 0.199 / 0.225 / 0.204), so the yardstick compares the typical
+/// run of each side, not one seed's.
 fn median_run(mut runs: Vec<Value>, seeds: Vec<Value>) -> Value {
     if runs.len() == 1 {
         return runs.pop().expect("one run");
@@ -252,7 +252,7 @@ fn median_run(mut runs: Vec<Value>, seeds: Vec<Value>) -> Value {
     let mut order: Vec<usize> = (0..runs.len()).collect();
     order.sort_by(|&a, &b| lpips(&runs[a]).total_cmp(&lpips(&runs[b])));
     let mut row = runs.swap_remove(order[order.len() / 2]);
-    row["single_source_runs"] = json!(each);
+    row["runs"] = json!(each);
     row
 }
 
