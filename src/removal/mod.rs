@@ -287,10 +287,11 @@ fn complete_views(
     transfer_follows: bool,
     progress: Progress,
 ) -> Result<()> {
-    let inputs: Vec<ViewInputs> = at.iter().map(|&i| views[i].completion_inputs()).collect();
-    let completed =
-        completer.complete_views_at(&inputs, at, transfer_follows, &mut |d, t| progress("complete", d, t))?;
-    drop(inputs);
+    let completed = {
+        let inputs: Vec<ViewInputs> = at.iter().map(|&i| views[i].completion_inputs()).collect();
+        let indexed: Vec<(usize, &ViewInputs)> = at.iter().copied().zip(&inputs).collect();
+        completer.complete_views_at(&indexed, transfer_follows, &mut |d, t| progress("complete", d, t))?
+    };
     for (&i, k) in at.iter().zip(completed) {
         views[i].set_completed(k);
     }

@@ -300,23 +300,21 @@ impl Completer {
         transfer_follows: bool,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Vec<Completed>> {
-        let at: Vec<usize> = (0..views.len()).collect();
-        self.complete_views_at(views, &at, transfer_follows, progress)
+        let views: Vec<(usize, &ViewInputs)> = views.iter().enumerate().collect();
+        self.complete_views_at(&views, transfer_follows, progress)
     }
 
-    /// `complete_views` of some of the views: `views[k]` is view `at[k]`, which gets that index
-    /// (so its result is the one it gets among all the views).
+    /// `complete_views` of some of the views, each with its index among all the views (so its
+    /// result is the one it gets among them), as `correct_depths` takes them.
     pub fn complete_views_at(
         &self,
-        views: &[ViewInputs],
-        at: &[usize],
+        views: &[(usize, &ViewInputs)],
         transfer_follows: bool,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Vec<Completed>> {
-        assert_eq!(views.len(), at.len(), "an index per view");
         let complete = |k: usize| {
-            let v = &views[k];
-            self.complete_view(v, at[k], transfer_follows).with_context(|| format!("completing view {}", v.name))
+            let (index, v) = views[k];
+            self.complete_view(v, index, transfer_follows).with_context(|| format!("completing view {}", v.name))
         };
         if !self.host_only(transfer_follows) {
             let mut out = Vec::with_capacity(views.len());
