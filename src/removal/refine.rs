@@ -15,7 +15,8 @@
 use crate::eval::render_psnr;
 use crate::gpu::Gpu;
 use crate::image_ops::{bounding_box, crop, including, Rect};
-use crate::render::{reference, RenderSettings};
+use crate::render::reach::reaches;
+use crate::render::RenderSettings;
 use crate::scene::dataset::{Dataset, View};
 use crate::scene::{Camera, GaussianScene};
 use crate::train::trainer::{Frozen, Motion, TrainConfig, Trainer};
@@ -429,28 +430,13 @@ pub fn refine(
 }
 
 /// The Gaussians any of `cameras` can show: a superset of what the renderer bins into their
-/// images (each Gaussian's pixel box as project.comp draws it, at opacity 1 and grown by 1 % and
-/// 2 pixels; in front of `near`). Any other Gaussian touches no pixel of any view, so it gets no
-/// gradient, its Adam moments stay zero and it never moves, and it adds nothing to any render
-/// (the renderer's sorts are stable, so the others keep their order): refining without it is
-/// the same refinement, less its projection, sorting and Adam step every iteration. Refining
-/// views over windows around the holes leaves out most of a scene.
+/// images (`render::reach::reaches`). Any other Gaussian touches no pixel of any view, so it gets
+/// no gradient, its Adam moments stay zero and it never moves, and it adds nothing to any render
+/// (the renderer's sorts are stable, so the others keep their order): refining without it is the
+/// same refinement, less its projection, sorting and Adam step every iteration. Refining views
+/// over windows around the holes leaves out most of a scene.
 pub fn seen_by_any(scene: &GaussianScene, cameras: &[Camera], near: f64) -> Vec<bool> {
-    // 2 ln(255) (binning_q_threshold at opacity 1, tile_binning.glsl), rounded up
-    const Q_MAX: f64 = 12.0;
-    (0..scene.len())
-        .map(|i| {
-            cameras.iter().any(|cam| {
-                let Some(g) = reference::project(scene, i, cam, near, 0) else { return false };
-                let rx = (Q_MAX * g.cov2d[0]).sqrt() * 1.01 + 2.0;
-                let ry = (Q_MAX * g.cov2d[2]).sqrt() * 1.01 + 2.0;
-                g.xy[0] + rx >= 0.0
-                    && g.xy[1] + ry >= 0.0
-                    && g.xy[0] - rx <= cam.width as f64
-                    && g.xy[1] - ry <= cam.height as f64
-            })
-        })
-        .collect()
+    (0..scene.len()).map(|i| cameras.iter().any(|cam| reaches(scene, i, cam, near))).collect()
 }
 
 #[cfg(test)]
