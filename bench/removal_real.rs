@@ -359,9 +359,10 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
     md += "\nThe acceptance yardsticks per scene (full pipeline): beats removal only, harmonic and nearest-copy on \
            masked PSNR and LPIPS; outside minus seen-elsewhere PSNR (at most 2 dB); never-seen LPIPS over the \
            harmonic fill's (at most 0.7); outside minus masked PSNR with perfect inpaintings (at most 1.5 dB); masked \
-           LPIPS with disagreeing inpaintings over that with one source (each the median of three runs: seeds \
-           1-3, and their three rotations over the views; at most 1; in brackets each side's runs over the \
-           one-source median, what a run varies by its seeds alone); \
+           LPIPS with disagreeing inpaintings over that with one consistent source (each the median of three runs: \
+           seeds 1-3 with shared inventions, and the plain fills of seeds 1-3 in three rotations over the views; \
+           at most 1; in brackets each side's runs over the consistent source's median, what a run varies by its \
+           seeds alone); \
            beside them, not a yardstick, how far the perfect inpaintings' masked PSNR lies under the capture \
            trained without the objects (what the composite's training and the 3D half lose with a perfect fill):\n\n\
            | scene | beats the three (PSNR / LPIPS) | seen-elsewhere gap dB | never-seen LPIPS ratio | perfect-inpainting gap dB | disagreeing LPIPS ratio | perfect inpaintings under the capture dB |\n\
@@ -402,8 +403,8 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
         let perfect = get(crate::PERFECT_INPAINTING);
         let ceiling = f(perfect, &["outside", "psnr"]).zip(f(perfect, &["mask", "psnr"])).map(|(a, b)| a - b);
         let lpips = |variant: &str| f(get(variant), &["lpips", "mask"]);
-        let disagreeing = lpips(crate::DISAGREEING).zip(lpips(crate::ONE_SOURCE)).map(|(a, b)| a / b);
-        // each side's runs over the one-source median: the ratios a run lands at by its seeds alone
+        let disagreeing = lpips(crate::DISAGREEING).zip(lpips(crate::CONSISTENT_SOURCE)).map(|(a, b)| a / b);
+        // each side's runs over the consistent source's median: the ratios a run lands at by its seeds alone
         // (statue-two-of-three's three single seeds spread by 10 %)
         let spread = |variant: &str, median: f64| -> Option<(f64, f64)> {
             let runs: Vec<f64> =
@@ -412,11 +413,11 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
             let hi = runs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             (runs.len() > 1).then_some((lo / median, hi / median))
         };
-        let spreads = lpips(crate::ONE_SOURCE)
-            .and_then(|median| spread(crate::ONE_SOURCE, median).zip(spread(crate::DISAGREEING, median)));
+        let spreads = lpips(crate::CONSISTENT_SOURCE)
+            .and_then(|median| spread(crate::CONSISTENT_SOURCE, median).zip(spread(crate::DISAGREEING, median)));
         let disagreeing = match (disagreeing, spreads) {
             (Some(d), Some(((lo, hi), (dlo, dhi)))) => {
-                format!("{d:.3} (one source's runs {lo:.3}-{hi:.3}, disagreeing {dlo:.3}-{dhi:.3})")
+                format!("{d:.3} (consistent source's runs {lo:.3}-{hi:.3}, disagreeing {dlo:.3}-{dhi:.3})")
             }
             (d, _) => show(d, 3),
         };

@@ -2,7 +2,7 @@
 //! kept training reused), each variant removed and scored, a row per variant.
 
 use crate::common::{self, cogeo, read_json, s};
-use crate::{CAPTURE_CEILING, DISAGREEING, DISAGREEING_ROTATIONS, DISAGREEING_SEEDS, ONE_SOURCE, PERFECT_INPAINTING};
+use crate::{CAPTURE_CEILING, CONSISTENT_SOURCE, DISAGREEING, DISAGREEING_ROTATIONS, DISAGREEING_SEEDS, PERFECT_INPAINTING};
 use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -31,17 +31,21 @@ pub struct Training<'a> {
 
 impl Training<'_> {
     /// A folder of completed views for `--inpainted`, view by view from the `--no-refine` runs of
-    /// the built-in fill with `seeds` (view i, in name order, from `seeds[i % seeds.len()]`). The runs
-    /// are kept in `dir` for the next variant.
-    fn seed_inpaintings(&self, dir: &Path, tagged: &Path, seeds: &[u64]) -> PathBuf {
+    /// the built-in fill with `seeds` (view i, in name order, from `seeds[i % seeds.len()]`), with
+    /// `--share-inventions` where `shared` (the views consistent: one invention per surface point).
+    /// The runs are kept in `dir` for the next variant.
+    fn seed_inpaintings(&self, dir: &Path, tagged: &Path, seeds: &[u64], shared: bool) -> PathBuf {
         let capture = Capture::at(self.data);
         let runs: Vec<PathBuf> = seeds
             .iter()
             .map(|seed| {
-                let out = dir.join(format!("fill_seed{seed}"));
+                let out = dir.join(format!("fill_seed{seed}{}", if shared { "_shared" } else { "" }));
                 if !out.join("inpainted").is_dir() {
                     let mut a = pipeline::remove(tagged, &capture, Chosen::Labels(self.labels), &out);
                     a.extend(s(&["--no-refine", "--seed", &seed.to_string()]));
+                    if shared {
+                        a.push("--share-inventions".into());
+                    }
                     cogeo(&a);
                 }
                 out.join("inpainted")
@@ -111,22 +115,17 @@ impl Training<'_> {
     }
 
     /// Trains the composite with `seed` into `dir` and tags it by each of `methods`, or copies a
-    /// kept training and taggings (`reuse`) that hold them all.
+    /// kept training (`reuse`) and its taggings; a tagging the kept training lacks is made and
+    /// kept beside the others (a run of some variants keeps only the taggings they ask for).
     fn train_and_tag(&self, dir: &Path, seed: u64, methods: &[&str]) {
         let layout = Layout { out: dir };
         let capture = Capture::at(self.data);
         let tagged_name = |method: &str| format!("tagged_{method}.ply");
-        // a kept training is reused only when it holds every tagging the variants ask for
         let kept = self.reuse.as_ref().map(|r| r.join(format!("seed{seed}")));
-        let reusable = kept.as_ref().filter(|k| {
-            k.join("train/scene.ply").is_file() && methods.iter().all(|m| k.join(tagged_name(m)).is_file())
-        });
+        let reusable = kept.as_ref().filter(|k| k.join("train/scene.ply").is_file());
         if let Some(k) = reusable {
-            eprintln!("{}: reusing the training and tagging kept in {}", self.name, k.display());
+            eprintln!("{}: reusing the training kept in {}", self.name, k.display());
             copy_tree(&k.join("train"), &layout.train());
-            for m in methods {
-                std::fs::copy(k.join(tagged_name(m)), dir.join(tagged_name(m))).expect("cannot copy a kept tagging");
-            }
         } else {
             let mut train_args = pipeline::train(&capture, &layout.train());
             // a composite trains as its capture did (removal_real::prepare), a synth room as the
@@ -139,25 +138,42 @@ impl Training<'_> {
                 train_args.push("--exposure".into());
             }
             cogeo(&train_args);
-            for method in methods {
-                let tagged = dir.join(tagged_name(method));
-                cogeo(&pipeline::tag(
-                    &layout.trained_scene(),
-                    &capture,
-                    Objects::Masks("object_mask"),
-                    Some(method),
-                    &tagged,
-                ));
+        }
+        for method in methods {
+            let tagged = dir.join(tagged_name(method));
+            match reusable.map(|k| k.join(tagged_name(method))).filter(|t| t.is_file()) {
+                Some(kept_tagging) => {
+                    std::fs::copy(kept_tagging, &tagged).expect("cannot copy a kept tagging");
+                }
+                None => {
+                    cogeo(&pipeline::tag(
+                        &layout.trained_scene(),
+                        &capture,
+                        Objects::Masks("object_mask"),
+                        Some(method),
+                        &tagged,
+                    ));
+                }
             }
-            if let Some(k) = &kept {
-                common::make_folder(k, |partial| {
-                    copy_tree(&layout.train(), &partial.join("train"));
-                    for m in methods {
-                        std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
-                            .expect("cannot keep a tagging");
-                    }
-                });
-                eprintln!("{}: training and tagging kept in {}", self.name, k.display());
+        }
+        let Some(k) = &kept else { return };
+        if reusable.is_none() {
+            common::make_folder(k, |partial| {
+                copy_tree(&layout.train(), &partial.join("train"));
+                for m in methods {
+                    std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
+                        .expect("cannot keep a tagging");
+                }
+            });
+            eprintln!("{}: training and tagging kept in {}", self.name, k.display());
+        } else {
+            // the taggings made here join the kept ones (a copy renamed into place: a run stopped
+            // halfway leaves no partial tagging there)
+            for m in methods.iter().filter(|m| !k.join(tagged_name(m)).is_file()) {
+                let partial = k.join(format!("{}.partial", tagged_name(m)));
+                std::fs::copy(dir.join(tagged_name(m)), &partial).expect("cannot keep a tagging");
+                std::fs::rename(&partial, k.join(tagged_name(m))).expect("cannot keep a tagging");
+                eprintln!("{}: tagging by {m} kept in {}", self.name, k.display());
             }
         }
     }
@@ -188,10 +204,11 @@ impl Training<'_> {
                 continue;
             }
             let tagged = dir.join(format!("tagged_{method}.ply"));
-            // the one-source variant runs once per seed, each seed's fill a consistent source of its
-            // own, the disagreeing one once per rotation of the seeds over the views; the others once
+            // the consistent-source variant runs once per seed, each seed's fill with shared
+            // inventions a consistent source of its own, the disagreeing one once per rotation of
+            // the seeds over the views; the others once
             let sources: Vec<Option<&[u64]>> = match *variant {
-                ONE_SOURCE => DISAGREEING_SEEDS.iter().map(|seed| Some(std::slice::from_ref(seed))).collect(),
+                CONSISTENT_SOURCE => DISAGREEING_SEEDS.iter().map(|seed| Some(std::slice::from_ref(seed))).collect(),
                 DISAGREEING => DISAGREEING_ROTATIONS.iter().map(|r| Some(&r[..])).collect(),
                 _ => vec![None],
             };
@@ -204,7 +221,8 @@ impl Training<'_> {
                     a.extend(s(&["--inpainted", &p(self.truth)]));
                 }
                 if let Some(seeds) = seeds {
-                    a.extend(s(&["--inpainted", &p(&self.seed_inpaintings(dir, &tagged, seeds))]));
+                    let shared = *variant == CONSISTENT_SOURCE;
+                    a.extend(s(&["--inpainted", &p(&self.seed_inpaintings(dir, &tagged, seeds, shared))]));
                 }
                 if self.exposure {
                     a.extend(s(&["--exposure", &p(&layout.exposure())]));
@@ -233,7 +251,7 @@ fn seeds_of(sources: &[Option<&[u64]>]) -> Vec<Value> {
     sources.iter().map(|s| s.map_or(Value::Null, |s| json!(s))).collect()
 }
 
-/// A variant's row: its one run, or of several runs (the one-source variant, a run per seed; the
+/// A variant's row: its one run, or of several runs (the consistent source, a run per seed; the
 /// disagreeing one, a run per rotation of the seeds) the one of median masked LPIPS, with every
 /// run's seeds, masked PSNR and LPIPS beside it (`runs`): one seed's fill can be luckier than
 /// another's by more than the disagreeing inpaintings' yardstick allows (statue-two-of-three,
