@@ -2,7 +2,9 @@
 //! kept training reused), each variant removed and scored, a row per variant.
 
 use crate::common::{self, cogeo, read_json, s};
-use crate::{CAPTURE_CEILING, CONSISTENT_SOURCE, DISAGREEING, DISAGREEING_ROTATIONS, DISAGREEING_SEEDS, PERFECT_INPAINTING};
+use crate::{
+    CAPTURE_CEILING, CONSISTENT_SOURCE, DISAGREEING, DISAGREEING_ROTATIONS, DISAGREEING_SEEDS, PERFECT_INPAINTING,
+};
 use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
