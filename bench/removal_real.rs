@@ -404,8 +404,8 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
         let ceiling = f(perfect, &["outside", "psnr"]).zip(f(perfect, &["mask", "psnr"])).map(|(a, b)| a - b);
         let lpips = |variant: &str| f(get(variant), &["lpips", "mask"]);
         let disagreeing = lpips(crate::DISAGREEING).zip(lpips(crate::CONSISTENT_SOURCE)).map(|(a, b)| a / b);
-        // each side's runs over the consistent source's median: the ratios a run lands at by its seeds alone
-        // (statue-two-of-three's three single seeds spread by 10 %)
+        // each side's runs over the consistent source's median: the ratios a run lands at by its
+        // seeds alone (statue-two-of-three's three disagreeing runs of 2026-12-03 spread by 7 %)
         let spread = |variant: &str, median: f64| -> Option<(f64, f64)> {
             let runs: Vec<f64> =
                 row(variant)?["runs"].as_array()?.iter().filter_map(|r| r["mask_lpips"].as_f64()).collect();
