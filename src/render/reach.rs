@@ -37,9 +37,14 @@ pub fn may_reach(scene: &GaussianScene, i: usize, camera: &Camera, near: f64) ->
         (Q_MAX * (row * variance + 0.3)).sqrt() * 1.01 + 2.0
     };
     let (rx, ry) = (half(camera.fx, u), half(camera.fy, v));
-    let (px, py) = (camera.fx * u + camera.cx, camera.fy * v + camera.cy);
-    // NaN anywhere (a degenerate Gaussian) keeps it: the renderer decides
-    !(px + rx < 0.0 || py + ry < 0.0 || px - rx > camera.width as f64 || py - ry > camera.height as f64)
+    box_meets_image([camera.fx * u + camera.cx, camera.fy * v + camera.cy], [rx, ry], camera)
+}
+
+/// Whether the box of half-extents `half` around image point `center` meets `camera`'s image. NaN
+/// anywhere (a degenerate Gaussian) keeps it: the renderer decides.
+fn box_meets_image(center: [f64; 2], half: [f64; 2], camera: &Camera) -> bool {
+    let ([x, y], [rx, ry]) = (center, half);
+    !(x + rx < 0.0 || y + ry < 0.0 || x - rx > camera.width as f64 || y - ry > camera.height as f64)
 }
 
 /// Whether Gaussian `i` of `scene` can be binned into any pixel of `camera`'s image: `may_reach`,
@@ -58,9 +63,8 @@ pub fn reaches(scene: &GaussianScene, i: usize, camera: &Camera, near: f64) -> b
         return false;
     }
     let q = (2.0 * (255.0 * g.opacity).ln()).max(0.0) * 1.01 + 0.01;
-    let (rx, ry) = ((q * g.cov2d[0]).sqrt() * 1.01 + 2.0, (q * g.cov2d[2]).sqrt() * 1.01 + 2.0);
-    let [x, y] = g.xy;
-    !(x + rx < 0.0 || y + ry < 0.0 || x - rx > camera.width as f64 || y - ry > camera.height as f64)
+    let half = [(q * g.cov2d[0]).sqrt() * 1.01 + 2.0, (q * g.cov2d[2]).sqrt() * 1.01 + 2.0];
+    box_meets_image(g.xy, half, camera)
 }
 
 /// `may_reach` for every Gaussian of `scene`. (Not `reaches`: for the hull's window renders its
