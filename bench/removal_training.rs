@@ -160,23 +160,16 @@ impl Training<'_> {
         }
         let Some(k) = &kept else { return };
         if reusable.is_none() {
-            common::make_folder(k, |partial| {
-                copy_tree(&layout.train(), &partial.join("train"));
-                for m in methods {
-                    std::fs::copy(dir.join(tagged_name(m)), partial.join(tagged_name(m)))
-                        .expect("cannot keep a tagging");
-                }
-            });
-            eprintln!("{}: training and tagging kept in {}", self.name, k.display());
-        } else {
-            // the taggings made here join the kept ones (a copy renamed into place: a run stopped
-            // halfway leaves no partial tagging there)
-            for m in methods.iter().filter(|m| !k.join(tagged_name(m)).is_file()) {
-                let partial = k.join(format!("{}.partial", tagged_name(m)));
-                std::fs::copy(dir.join(tagged_name(m)), &partial).expect("cannot keep a tagging");
-                std::fs::rename(&partial, k.join(tagged_name(m))).expect("cannot keep a tagging");
-                eprintln!("{}: tagging by {m} kept in {}", self.name, k.display());
-            }
+            common::make_folder(k, |partial| copy_tree(&layout.train(), &partial.join("train")));
+            eprintln!("{}: training kept in {}", self.name, k.display());
+        }
+        // the taggings made here join the kept ones (a copy renamed into place: a run stopped
+        // halfway leaves no partial tagging there)
+        for m in methods.iter().filter(|m| !k.join(tagged_name(m)).is_file()) {
+            let partial = k.join(format!("{}.partial", tagged_name(m)));
+            std::fs::copy(dir.join(tagged_name(m)), &partial).expect("cannot keep a tagging");
+            std::fs::rename(&partial, k.join(tagged_name(m))).expect("cannot keep a tagging");
+            eprintln!("{}: tagging by {m} kept in {}", self.name, k.display());
         }
     }
 
