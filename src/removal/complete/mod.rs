@@ -131,7 +131,7 @@ pub struct CompletionConfig {
     /// mean) where no photo saw the background and the surface's texture does not repeat (0-1).
     /// 1 keeps it sharp; lower trades sharpness for error against the unseen truth, since grass
     /// copied from elsewhere falls where the real grass does not (invention_contrast.rs).
-    #[arg(long, default_value_t = 0.7, value_parser = invention_contrast::parse_contrast)]
+    #[arg(long, default_value_t = 0.85, value_parser = invention_contrast::parse_contrast)]
     pub invention_contrast: f32,
     /// Contrast kept of the structure of those inventions (0-1): what their 3 x 3 means add to
     /// their surface's mean within 12 px, the clumps of the copied patches. 0 leaves the local
