@@ -7,7 +7,8 @@
 //!   LaMa-contract ONNX model, or the user's own inpainted views.
 //! - `exemplar`: PatchMatch exemplar inpainting on the GPU, guided by the surfaces.
 //! - `edge_tone`: the exemplar's inventions shifted to the tone of the colors around them.
-//! - `invention_contrast`: their texture's contrast lowered where it is random.
+//! - `invention_contrast`: their texture's contrast lowered where it is random, their level
+//!   taken up from the known colors beside them.
 //! - `depth`: least-squares scale/shift anchoring, the built-in and Depth Anything priors, the
 //!   farther plane where the Gaussians left after removal show it, the edge-aware model-free
 //!   refinement.
@@ -472,12 +473,13 @@ impl Completer {
             let (rgb, repeats) = self.inpainter.inpaint_again(i, &image, &rest, &avoid, guide, w, h)?;
             c.rgb = rgb;
             // the exemplar's copied texture: it keeps the brightness of where it was copied from
-            // (edge_tone.rs), and a random texture's copy is not the truth's (invention_contrast.rs)
+            // (edge_tone.rs), a random texture's copy is not the truth's, and beside the known
+            // colors the points are mostly ones a photo saw (invention_contrast.rs)
             if let Some(repeats) = repeats {
                 let lends: Vec<bool> = (0..w * h).map(|p| !rest[p] && !avoid[p]).collect();
                 edge_tone::match_edge_tone(&mut c.rgb, &rest, &lends, &c.surfaces, w, h);
-                let random = invention_contrast::random_copies(&rest, &c.surfaces, &repeats);
-                invention_contrast::lower_contrast(&mut c.rgb, &random, &c.surfaces, w, h, self.invention_contrast);
+                let (known, contrast) = ((&image[..], &lends[..]), self.invention_contrast);
+                invention_contrast::temper(&mut c.rgb, &rest, known, &c.surfaces, &repeats, contrast, w, h);
             }
             c.texture_pending = false;
         }
