@@ -75,7 +75,7 @@ impl Contrast {
 /// checkerboard, bricks: 48 of the synth rooms' 55 planes) is continued in phase with the truth
 /// and keeps its contrast; grass, gravel and wood grain (none of the real captures' 173 planes)
 /// are not, nor is what lies on no plane.
-pub fn random_copies(fill: &[bool], labels: &[u8], repeats: &[bool; 256]) -> Vec<bool> {
+fn random_copies(fill: &[bool], labels: &[u8], repeats: &[bool; 256]) -> Vec<bool> {
     fill.iter().zip(labels).map(|(&f, &l)| f && !repeats[l as usize]).collect()
 }
 
@@ -102,7 +102,7 @@ pub fn temper(
     let membrane = fill_by_surface(image, invented, surfaces, w, h, 3, Boundary::TypicalColors);
     let weight = membrane_weights(known, w, h);
     lower_contrast(rgb, &random, surfaces, w, h, contrast);
-    follow_known_colors(rgb, &random, &NearKnown { membrane: &membrane, weight: &weight }, w, h);
+    follow_known_colors(rgb, &random, (&membrane, &weight), w, h);
 }
 
 /// `--invention-contrast` and `--invention-structure`'s parser: a number from 0 to 1.
@@ -126,17 +126,9 @@ pub fn parse_contrast(s: &str) -> Result<f32, String> {
 /// the membrane everywhere 21.36); the other real scenes moved by -0.04 to +0.02 dB.
 pub const MEMBRANE_FADE: f32 = 8.0;
 
-/// Where the inventions' level comes from next to the known colors (`follow_known_colors`):
-/// `membrane`, planar RGB, the harmonic fill of each surface from its known pixels (what
-/// `--inpainter harmonic` fills), and `weight`, each pixel's weight on it (`membrane_weights`).
-pub struct NearKnown<'a> {
-    pub membrane: &'a [f32],
-    pub weight: &'a [f32],
-}
-
 /// Each pixel's weight on the membrane: exp(-d / MEMBRANE_FADE), d its distance to the nearest
 /// `known` pixel (1 on a known pixel, 0 where none is known).
-pub fn membrane_weights(known: &[bool], w: usize, h: usize) -> Vec<f32> {
+fn membrane_weights(known: &[bool], w: usize, h: usize) -> Vec<f32> {
     distance_to(known, w, h).into_iter().map(|d| (-d / MEMBRANE_FADE).exp()).collect()
 }
 
@@ -144,7 +136,7 @@ pub fn membrane_weights(known: &[bool], w: usize, h: usize) -> Vec<f32> {
 /// g) (`contrast`), per channel: m the mean of the invented pixels on its surface (`surfaces`; 0 =
 /// none, one group of its own) in the (2 CONTRAST_RADIUS + 1)^2 window around it, g that mean in
 /// the (2 GRAIN_RADIUS + 1)^2 window. Other pixels are untouched.
-pub fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: usize, h: usize, contrast: Contrast) {
+fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: usize, h: usize, contrast: Contrast) {
     let n = w * h;
     if contrast == Contrast::UNCHANGED {
         return;
@@ -167,18 +159,20 @@ pub fn lower_contrast(rgb: &mut [f32], invented: &[bool], surfaces: &[u8], w: us
     }
 }
 
-/// Shifts each `invented` pixel of planar RGB `rgb` (w x h) toward the known colors by its weight
-/// (`near`): by weight (membrane - l), l the mean of the invented pixels of every surface in the
-/// (2 CONTRAST_RADIUS + 1)^2 window around it. The inventions' level moves as a whole; what a
-/// pixel adds to l (its grain, and its surface's tone against its neighbours') stays. Replacing
-/// each surface's own local mean by the membrane instead scored statue-one 21.24 / 0.360 against
-/// 21.41 / 0.352 this way (bench/JOURNAL.md, 2026-12-03, 16:08).
-pub fn follow_known_colors(rgb: &mut [f32], invented: &[bool], near: &NearKnown, w: usize, h: usize) {
+/// Shifts each `invented` pixel of planar RGB `rgb` (w x h) toward the known colors: by weight
+/// (membrane - l), `membrane` planar RGB, the harmonic fill of each surface from its known pixels
+/// (what `--inpainter harmonic` fills), `weight` the pixel's weight on it (`membrane_weights`), l
+/// the mean of the invented pixels of every surface in the (2 CONTRAST_RADIUS + 1)^2 window around
+/// it. The inventions' level moves as a whole; what a pixel adds to l (its grain, and its
+/// surface's tone against its neighbours') stays. Replacing each surface's own local mean by the
+/// membrane instead scored statue-one 21.24 / 0.360 against 21.41 / 0.352 this way
+/// (bench/JOURNAL.md, 2026-12-03, 16:08).
+fn follow_known_colors(rgb: &mut [f32], invented: &[bool], (membrane, weight): (&[f32], &[f32]), w: usize, h: usize) {
     let n = w * h;
     let local = masked_box_mean(rgb, invented, w, h, 3, CONTRAST_RADIUS);
     for p in (0..n).filter(|&p| invented[p]) {
         for c in 0..3 {
-            rgb[c * n + p] += near.weight[p] * (near.membrane[c * n + p] - local[c * n + p]);
+            rgb[c * n + p] += weight[p] * (membrane[c * n + p] - local[c * n + p]);
         }
     }
 }
@@ -326,10 +320,9 @@ mod tests {
         let membrane = fill_by_surface(&image, &invented, &surfaces, w, h, 3, Boundary::TypicalColors);
         assert!(membrane.iter().all(|&v| (v - 0.2).abs() < 1e-4), "the membrane of a constant boundary");
         let weight = membrane_weights(&known, w, h);
-        let near = NearKnown { membrane: &membrane, weight: &weight };
         let mut after = copies.clone();
         lower_contrast(&mut after, &invented, &surfaces, w, h, Contrast { grain: 1.0, structure: 0.0 });
-        follow_known_colors(&mut after, &invented, &near, w, h);
+        follow_known_colors(&mut after, &invented, (&membrane, &weight), w, h);
         let mean3 = |img: &[f32], p: usize, c: usize| {
             let (x, y) = (p % w, p / w);
             let q: Vec<usize> = (y.saturating_sub(1)..(y + 2).min(h))
