@@ -4,6 +4,7 @@
 use crate::common::{self, cogeo, read_json, s};
 use crate::{
     CAPTURE_CEILING, CONSISTENT_SOURCE, DISAGREEING, DISAGREEING_ROTATIONS, DISAGREEING_SEEDS, PERFECT_INPAINTING,
+    SEEDED_VARIANTS,
 };
 use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use serde_json::{json, Value};
@@ -29,6 +30,10 @@ pub struct Training<'a> {
     /// A real scene's capture trained without the objects (`CAPTURE_CEILING`); None for the synth
     /// rooms, which skip that variant.
     pub original: Option<&'a Path>,
+    /// `cogeo remove --seed` of each run of the full pipeline and of the rivals it must beat
+    /// (`SEEDED_VARIANTS`, `--removal-seeds N`: seeds 0 to N-1): their row is the run of median
+    /// masked LPIPS, every run's scores beside it. One seed: the default's one run.
+    pub removal_seeds: u64,
 }
 
 impl Training<'_> {
@@ -202,16 +207,30 @@ impl Training<'_> {
             // the consistent-source variant runs once per seed, each seed's fill with shared
             // inventions a consistent source of its own, the disagreeing one once per rotation of
             // the seeds over the views; the others once
-            let sources: Vec<Option<&[u64]>> = match *variant {
-                CONSISTENT_SOURCE => DISAGREEING_SEEDS.iter().map(|seed| Some(std::slice::from_ref(seed))).collect(),
-                DISAGREEING => DISAGREEING_ROTATIONS.iter().map(|r| Some(&r[..])).collect(),
-                _ => vec![None],
+            // the full pipeline and its rivals once per removal seed (`--removal-seeds`)
+            let sources: Vec<RunSeeds> = match *variant {
+                CONSISTENT_SOURCE => {
+                    DISAGREEING_SEEDS.iter().map(|seed| RunSeeds::Inpainted(std::slice::from_ref(seed))).collect()
+                }
+                DISAGREEING => DISAGREEING_ROTATIONS.iter().map(|r| RunSeeds::Inpainted(&r[..])).collect(),
+                v if SEEDED_VARIANTS.contains(&v) && self.removal_seeds > 1 => {
+                    (0..self.removal_seeds).map(RunSeeds::Removal).collect()
+                }
+                _ => vec![RunSeeds::Default],
             };
             let mut runs = Vec::new();
-            for (r, seeds) in sources.iter().enumerate() {
+            for (r, run_seeds) in sources.iter().enumerate() {
                 let out = if sources.len() > 1 { dir.join(format!("variant_{k}_run{r}")) } else { out.clone() };
                 let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(self.labels), &out);
                 a.extend(s(extra));
+                let seeds = match run_seeds {
+                    RunSeeds::Inpainted(seeds) => Some(*seeds),
+                    RunSeeds::Removal(seed) => {
+                        a.extend(s(&["--seed", &seed.to_string()]));
+                        None
+                    }
+                    RunSeeds::Default => None,
+                };
                 if *variant == PERFECT_INPAINTING {
                     a.extend(s(&["--inpainted", &p(self.truth)]));
                 }
@@ -241,13 +260,31 @@ impl Training<'_> {
     }
 }
 
+/// What makes a variant's runs differ.
+enum RunSeeds<'s> {
+    /// One run with `cogeo remove`'s default seed.
+    Default,
+    /// The built-in fill's seeds fed back as `--inpainted`, view by view (`seed_inpaintings`).
+    Inpainted(&'s [u64]),
+    /// `cogeo remove --seed`: the exemplar fill's and the refinement's view order.
+    Removal(u64),
+}
+
 /// The seeds of each run of a variant, for its row.
-fn seeds_of(sources: &[Option<&[u64]>]) -> Vec<Value> {
-    sources.iter().map(|s| s.map_or(Value::Null, |s| json!(s))).collect()
+fn seeds_of(sources: &[RunSeeds]) -> Vec<Value> {
+    sources
+        .iter()
+        .map(|s| match s {
+            RunSeeds::Default => Value::Null,
+            RunSeeds::Inpainted(seeds) => json!(seeds),
+            RunSeeds::Removal(seed) => json!({ "removal_seed": seed }),
+        })
+        .collect()
 }
 
 /// A variant's row: its one run, or of several runs (the consistent source, a run per seed; the
-/// disagreeing one, a run per rotation of the seeds) the one of median masked LPIPS, with every
+/// disagreeing one, a run per rotation of the seeds; with `--removal-seeds`, the full pipeline and
+/// its rivals, a run per removal seed) the one of median masked LPIPS, with every
 /// run's seeds, masked PSNR and LPIPS beside it (`runs`): one seed's fill can be luckier than
 /// another's by more than the disagreeing inpaintings' yardstick allows (statue-two-of-three,
 /// seeds 0-3: masked LPIPS 0.210 / 0.199 / 0.225 / 0.204), so the yardstick compares the typical
