@@ -206,8 +206,8 @@ impl Training<'_> {
             let tagged = dir.join(format!("tagged_{method}.ply"));
             // the consistent-source variant runs once per seed, each seed's fill with shared
             // inventions a consistent source of its own, the disagreeing one once per rotation of
-            // the seeds over the views; the others once
-            // the full pipeline and its rivals once per removal seed (`--removal-seeds`)
+            // the seeds over the views, the full pipeline and its rivals once per removal seed
+            // (`--removal-seeds`); the others once
             let sources: Vec<RunSeeds> = match *variant {
                 CONSISTENT_SOURCE => {
                     DISAGREEING_SEEDS.iter().map(|seed| RunSeeds::Inpainted(std::slice::from_ref(seed))).collect()
@@ -254,7 +254,14 @@ impl Training<'_> {
                     "background_psnr_vs_original": report["background_psnr_vs_original"]["mean"],
                 }));
             }
-            rows.push(median_run(runs, seeds_of(&sources)));
+            let row = median_run(runs, seeds_of(&sources));
+            // the median run's folder is the variant's, as a single run's (the contact sheet's)
+            if let Some(r) = row["median_run"].as_u64() {
+                let median = dir.join(format!("variant_{k}_run{r}"));
+                std::fs::rename(&median, &out)
+                    .unwrap_or_else(|e| panic!("cannot rename {} to {}: {e}", median.display(), out.display()));
+            }
+            rows.push(row);
         }
         rows
     }
@@ -301,8 +308,10 @@ fn median_run(mut runs: Vec<Value>, seeds: Vec<Value>) -> Value {
         .collect();
     let mut order: Vec<usize> = (0..runs.len()).collect();
     order.sort_by(|&a, &b| lpips(&runs[a]).total_cmp(&lpips(&runs[b])));
-    let mut row = runs.swap_remove(order[order.len() / 2]);
+    let median = order[order.len() / 2];
+    let mut row = runs.swap_remove(median);
     row["runs"] = json!(each);
+    row["median_run"] = json!(median);
     row
 }
 
