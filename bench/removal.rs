@@ -189,7 +189,7 @@ fn main() {
     let real: Vec<&removal_real::RealSpec> =
         removal_real::REAL_SCENES.iter().filter(|s| named(s.name, "real")).collect();
     if !real.is_empty() {
-        removal_real::run(&args, &real, &variants, &lpips, &fid, &root);
+        removal_real::run(&args, &real, &variants, &lpips, &fid, &root, removal_seeds);
     }
     let synth: Vec<&SceneSpec> = SCENES.iter().filter(|s| named(s.name, "synth")).collect();
     if synth.is_empty() {

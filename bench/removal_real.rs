@@ -191,7 +191,8 @@ fn resampled_capture(spec: &RealSpec, shared: &Path, factor: &str) -> PathBuf {
 }
 
 /// Runs every real scene in `specs` with `variants` and writes their table (`removal-real-table`
-/// in bench/RESULTS.md, results/removal-real-<device>.json) and contact sheet.
+/// in bench/RESULTS.md, results/removal-real-<device>.json) and contact sheet; `removal_seeds`
+/// (`--removal-seeds`) runs of the full pipeline and its rivals each.
 pub fn run(
     args: &[String],
     specs: &[&RealSpec],
@@ -199,6 +200,7 @@ pub fn run(
     lpips: &Option<String>,
     fid: &Option<String>,
     root: &Path,
+    removal_seeds: u64,
 ) {
     let arg = |n: &str, d: &str| crate::common::arg(args, n).unwrap_or_else(|| d.to_string());
     // --real-downscale N, or per capture: statue=2,cup=4
@@ -211,7 +213,6 @@ pub fn run(
         pick.unwrap_or("1").to_string()
     };
     let iters = arg("--real-iters", "800");
-    let removal_seeds: u64 = arg("--removal-seeds", "1").parse().expect("--removal-seeds takes a count");
     let mut rows: Vec<serde_json::Value> = Vec::new();
     let mut sheet_rows = Vec::new();
     // --real-table-only: no scene is run; the table and sheet are rebuilt from the stored rows
@@ -341,10 +342,7 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
     for r in rows {
         let m = &r["metrics"];
         // a row run once per removal seed (`--removal-seeds`) shows its run of median LPIPS
-        let seeds: Vec<u64> = r["runs"]
-            .as_array()
-            .map(|runs| runs.iter().filter_map(|x| x["seeds"]["removal_seed"].as_u64()).collect())
-            .unwrap_or_default();
+        let seeds: Vec<u64> = removal_runs(r).into_iter().map(|(seed, _)| seed).collect();
         let variant = match (seeds.first(), seeds.last()) {
             (Some(a), Some(b)) if seeds.len() > 1 => {
                 format!("{} (the run of median masked LPIPS of removal seeds {a}-{b})", r["variant"].as_str().unwrap())
@@ -392,11 +390,8 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
         let rivals = ["removal only", "harmonic fill (no texture synthesis)", "nearest-copy fill (GG-style)"];
         // a variant's masked PSNR or LPIPS by removal seed (`--removal-seeds`; None: its one run)
         let by_seed = |variant: &str, key: &str| -> Vec<(u64, f64)> {
-            let runs = row(variant).and_then(|r| r["runs"].as_array());
-            runs.map(|runs| {
-                runs.iter().filter_map(|x| Some((x["seeds"]["removal_seed"].as_u64()?, x[key].as_f64()?))).collect()
-            })
-            .unwrap_or_default()
+            let runs = row(variant).map(removal_runs).unwrap_or_default();
+            runs.into_iter().filter_map(|(seed, run)| Some((seed, run[key].as_f64()?))).collect()
         };
         // the full pipeline's margin over a rival (positive: a higher value): the median over the
         // removal seeds of the two runs' difference at each seed, as a seed draws one refinement
@@ -406,18 +401,16 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
         let margin = |rival: &str, path: &[&str], key: &str| -> Option<f64> {
             let (mine, theirs) = (by_seed("cogeo (full)", key), by_seed(rival, key));
             let one = f(get(rival), path);
-            let mut d: Vec<f64> = mine
+            let d: Vec<f64> = mine
                 .iter()
                 .filter_map(|&(seed, m)| match theirs.is_empty() {
                     true => one.map(|t| m - t),
                     false => theirs.iter().find(|t| t.0 == seed).map(|t| m - t.1),
                 })
                 .collect();
-            d.sort_by(f64::total_cmp);
-            match d.len() {
-                0 => Some(f(full, path)? - one?),
-                n if n % 2 == 1 => Some(d[n / 2]),
-                n => Some(0.5 * (d[n / 2 - 1] + d[n / 2])),
+            match d.is_empty() {
+                true => Some(f(full, path)? - one?),
+                false => Some(crate::common::median(d)),
             }
         };
         // "yes" or "no", and the margin over the closest of the rivals that ran (PSNR: the least
@@ -478,6 +471,13 @@ fn table(rows: &[serde_json::Value], specs: &[&RealSpec], device: &str) -> Strin
         );
     }
     md
+}
+
+/// A row's runs by removal seed (`--removal-seeds`), each with its scores (`runs` of
+/// removal_training.rs's `median_run`); empty for a row of one run or of other seeds.
+fn removal_runs(row: &serde_json::Value) -> Vec<(u64, &serde_json::Value)> {
+    let runs = row["runs"].as_array().map(Vec::as_slice).unwrap_or_default();
+    runs.iter().filter_map(|run| Some((run["seeds"]["removal_seed"].as_u64()?, run))).collect()
 }
 
 /// The contact sheet's columns (input, removal only, cogeo, perfect inpainting, ground truth) and
