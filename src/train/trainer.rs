@@ -25,8 +25,10 @@ use anyhow::{bail, Result};
 mod adc;
 mod evaluate;
 mod exposure_maps;
+mod iterate_average;
 
 pub use evaluate::Metrics;
+pub use iterate_average::IterateAverage;
 
 pub use super::config::{Frozen, Motion, Strategy, TrainConfig};
 

@@ -1,0 +1,106 @@
+//! Iterate averaging (Polyak-Ruppert) for `Trainer`: the mean of its parameters over the steps
+//! that follow `IterateAverage::new`, kept on the GPU (`running_mean.comp`), which can replace the
+//! parameters of the last step (`IterateAverage::apply`).
+//!
+//! A trainer that steps one view at a time at a constant rate ends where the last views pulled
+//! it. Where the views' targets agree, every step pulls the same way and the mean of the last
+//! steps is the last step; where they disagree (the removal's per-view fills), the mean over a
+//! pass of the views is the compromise they all pull around, not the last views' side of it
+//! (removal/refine.rs `AVERAGE_PASSES`).
+
+use super::Trainer;
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Recorder};
+use crate::render::SceneBuffers;
+use crate::shaders;
+use anyhow::{ensure, Result};
+use bytemuck::{Pod, Zeroable};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RunningMeanPush {
+    value: u64,
+    mean: u64,
+    n: u32,
+    weight: f32,
+}
+
+/// The running mean of a trainer's parameters, one buffer per parameter tensor.
+pub struct IterateAverage {
+    pipeline: ComputePipeline,
+    /// Means, log-scales, rotations, opacity logits and SH, as `SceneBuffers` orders them.
+    means: Vec<Buffer>,
+    /// Floats per tensor.
+    lengths: Vec<u32>,
+    /// Iterates averaged so far.
+    count: u32,
+}
+
+/// The parameter tensors of `scene` in a fixed order, with their float counts.
+fn tensors(scene: &SceneBuffers) -> [(&Buffer, u32); 5] {
+    let n = scene.num_gaussians;
+    let k = crate::scene::sh_coeffs(scene.sh_degree) as u32;
+    [
+        (&scene.means, 3 * n),
+        (&scene.log_scales, 3 * n),
+        (&scene.quats, 4 * n),
+        (&scene.opacity_logits, n),
+        (&scene.sh, 3 * k * n),
+    ]
+}
+
+impl IterateAverage {
+    /// An empty average over the parameters `trainer` holds now (their number must not change:
+    /// no densification while it runs).
+    pub fn new(trainer: &Trainer) -> Result<IterateAverage> {
+        let gpu = &trainer.gpu;
+        let tensors = tensors(&trainer.scene);
+        let means = tensors
+            .iter()
+            .map(|(_, len)| Buffer::zeroed(gpu, "iterate average", 4 * (*len).max(1) as u64))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(IterateAverage {
+            pipeline: ComputePipeline::new(gpu, "running_mean", shaders::RUNNING_MEAN)?,
+            means,
+            lengths: tensors.map(|(_, len)| len).to_vec(),
+            count: 0,
+        })
+    }
+
+    /// Iterates averaged so far.
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// Takes `trainer`'s parameters as they are now into the mean.
+    pub fn add(&mut self, trainer: &Trainer) -> Result<()> {
+        self.count += 1;
+        let weight = 1.0 / self.count as f32;
+        self.record(trainer, |param, mean| (param.address(), mean.address(), weight))
+    }
+
+    /// Replaces `trainer`'s parameters by their mean (nothing when no iterate was added). Its
+    /// Adam moments stay those of its last step.
+    pub fn apply(&self, trainer: &mut Trainer) -> Result<()> {
+        if self.count == 0 {
+            return Ok(());
+        }
+        self.record(trainer, |param, mean| (mean.address(), param.address(), 1.0))
+    }
+
+    /// One running-mean dispatch per tensor: `pick(param, mean)` gives (value, mean, weight).
+    fn record(&self, trainer: &Trainer, pick: impl Fn(&Buffer, &Buffer) -> (u64, u64, f32) + Copy) -> Result<()> {
+        let tensors = tensors(&trainer.scene);
+        ensure!(
+            tensors.iter().map(|(_, len)| *len).eq(self.lengths.iter().copied()),
+            "the trainer's Gaussians changed while their iterates were averaged"
+        );
+        let mut rec = Recorder::new(&trainer.gpu)?;
+        for ((param, n), mean) in tensors.iter().zip(&self.means) {
+            let (value, mean, weight) = pick(param, mean);
+            let push = RunningMeanPush { value, mean, n: *n, weight };
+            rec.dispatch(&self.pipeline, &push, dispatch_1d(n.div_ceil(256)));
+        }
+        rec.submit_and_wait()?;
+        Ok(())
+    }
+}
