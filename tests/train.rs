@@ -208,6 +208,56 @@ fn frozen_groups_stay_put_and_trust_region_bounds_each_gaussian() {
     assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
 }
 
+/// The iterate average (train/trainer/iterate_average.rs) against the mean of the parameters
+/// downloaded after each averaged step, computed here in f64; applying it puts the mean in the
+/// trainer's parameters, which then differ from the last step's.
+#[test]
+fn iterate_average_is_the_mean_of_the_steps() {
+    use cogeo::scene::GaussianScene;
+    use cogeo::train::trainer::{IterateAverage, TrainConfig, Trainer};
+    let (gpu, scene, data) = one_view_scene(7, 200, 1, [1.0, 0.0, 0.2, 0.0]);
+    let cfg = TrainConfig { iters: 100, densify: false, ..Default::default() };
+    let mut t = Trainer::new(&gpu, &data, &scene, cfg).unwrap();
+    t.trust_radius = Some(0.01);
+    t.iterate(&data, false).unwrap();
+    // every parameter of a scene, in one list
+    let flat = |s: &GaussianScene| -> Vec<f64> {
+        let mut v: Vec<f64> = s.means.as_flattened().iter().map(|&x| x as f64).collect();
+        v.extend(s.log_scales.as_flattened().iter().map(|&x| x as f64));
+        v.extend(s.quats.as_flattened().iter().map(|&x| x as f64));
+        v.extend(s.opacity_logits.iter().map(|&x| x as f64));
+        v.extend(s.sh.iter().map(|&x| x as f64));
+        v
+    };
+    let mut average = IterateAverage::new(&t).unwrap();
+    let before = flat(&t.download_scene().unwrap());
+    average.apply(&mut t).unwrap();
+    assert_eq!(flat(&t.download_scene().unwrap()), before, "an empty average changed the scene");
+    let mut sum: Vec<f64> = Vec::new();
+    let steps = 5;
+    for _ in 0..steps {
+        t.iterate(&data, false).unwrap();
+        average.add(&t).unwrap();
+        let now = flat(&t.download_scene().unwrap());
+        sum.resize(now.len(), 0.0);
+        sum.iter_mut().zip(&now).for_each(|(s, x)| *s += x);
+    }
+    assert_eq!(average.count(), steps);
+    let last = flat(&t.download_scene().unwrap());
+    average.apply(&mut t).unwrap();
+    let got = flat(&t.download_scene().unwrap());
+    let mut worst = 0.0f64;
+    for ((g, s), l) in got.iter().zip(&sum).zip(&last) {
+        let mean = s / steps as f64;
+        // a running mean in float32: a few ulps of the values averaged
+        let tolerance = 8.0 * f32::EPSILON as f64 * mean.abs().max(l.abs()).max(1e-3);
+        assert!((g - mean).abs() <= tolerance, "averaged {g}, mean of the steps {mean}");
+        worst = worst.max((mean - l).abs());
+    }
+    assert!(worst > 1e-4, "the steps barely moved ({worst}): the mean was not exercised");
+    assert!(gpu.validation_messages().is_empty(), "{:?}", gpu.validation_messages());
+}
+
 /// The fused projection-backward + Adam pass (train/fused.rs) against the passes it replaces
 /// (projection backward into zeroed gradients, the MCMC regularizer, Adam per tensor), from the same
 /// scene over several steps: SH degree 3 with its bands growing or all in use, Gaussians the views
