@@ -1,7 +1,8 @@
 #version 460
 // One step of a running mean over `n` floats: mean += weight * (value - mean). With weight 1/k at
 // the k-th value, `mean` holds the mean of the k values so far (Polyak-Ruppert averaging of a
-// trainer's iterates, train/trainer/iterate_average.rs); with weight 1 it copies `value`.
+// trainer's iterates, train/trainer/iterate_average.rs); the first value (weight 1 on a zeroed mean)
+// is taken exactly.
 #include "common.glsl"
 
 layout(local_size_x = 256) in;

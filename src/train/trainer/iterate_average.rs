@@ -73,34 +73,40 @@ impl IterateAverage {
 
     /// Takes `trainer`'s parameters as they are now into the mean.
     pub fn add(&mut self, trainer: &Trainer) -> Result<()> {
+        let tensors = self.tensors_of(trainer)?;
         self.count += 1;
         let weight = 1.0 / self.count as f32;
-        self.record(trainer, |param, mean| (param.address(), mean.address(), weight))
+        let mut rec = Recorder::new(&trainer.gpu)?;
+        for ((param, n), mean) in tensors.iter().zip(&self.means) {
+            let push = RunningMeanPush { value: param.address(), mean: mean.address(), n: *n, weight };
+            rec.dispatch(&self.pipeline, &push, dispatch_1d(n.div_ceil(256)));
+        }
+        rec.submit_and_wait()?;
+        Ok(())
     }
 
-    /// Replaces `trainer`'s parameters by their mean (nothing when no iterate was added). Its
-    /// Adam moments stay those of its last step.
+    /// Replaces `trainer`'s parameters by their mean, copied exactly (nothing when no iterate was
+    /// added). Its Adam moments stay those of its last step.
     pub fn apply(&self, trainer: &mut Trainer) -> Result<()> {
         if self.count == 0 {
             return Ok(());
         }
-        self.record(trainer, |param, mean| (mean.address(), param.address(), 1.0))
+        let tensors = self.tensors_of(trainer)?;
+        let mut rec = Recorder::new(&trainer.gpu)?;
+        for ((param, n), mean) in tensors.iter().zip(&self.means).filter(|((_, n), _)| *n > 0) {
+            rec.copy(mean, param, 4 * *n as u64);
+        }
+        rec.submit_and_wait()?;
+        Ok(())
     }
 
-    /// One running-mean dispatch per tensor: `pick(param, mean)` gives (value, mean, weight).
-    fn record(&self, trainer: &Trainer, pick: impl Fn(&Buffer, &Buffer) -> (u64, u64, f32) + Copy) -> Result<()> {
+    /// `trainer`'s parameter tensors, which must be as many floats as when the average began.
+    fn tensors_of<'t>(&self, trainer: &'t Trainer) -> Result<[(&'t Buffer, u32); 5]> {
         let tensors = tensors(&trainer.scene);
         ensure!(
             tensors.iter().map(|(_, len)| *len).eq(self.lengths.iter().copied()),
             "the trainer's Gaussians changed while their iterates were averaged"
         );
-        let mut rec = Recorder::new(&trainer.gpu)?;
-        for ((param, n), mean) in tensors.iter().zip(&self.means) {
-            let (value, mean, weight) = pick(param, mean);
-            let push = RunningMeanPush { value, mean, n: *n, weight };
-            rec.dispatch(&self.pipeline, &push, dispatch_1d(n.div_ceil(256)));
-        }
-        rec.submit_and_wait()?;
-        Ok(())
+        Ok(tensors)
     }
 }
