@@ -3,16 +3,23 @@
 //! transmittance to one half). Stage 3 anchors its depth prior to it, the photo-consistent hole
 //! depth starts from it, and the color transfer checks its sources against it.
 //!
-//! Neither is right on every capture. Where a surface is a thin, noisy shell of Gaussians (the
-//! statue's lawn) the expected depth scatters in front of it and the completed depth lies in
-//! front of the lawn; where the capture's Gaussians sit in front of a smooth surface (the cup's
-//! desk) the median depth loses the views' agreement. The captured photos tell them apart: the
+//! Neither serves the built-in fill on every capture. Where a surface is a thin, noisy shell of
+//! Gaussians (the statue's lawn) the expected depth scatters in front of it and the completed
+//! depth lies in front of the lawn. On a glossy surface (the cup's desk) the training puts the
+//! reflections behind it, and the expected depth follows them: 4-10 % behind the desk's plane on
+//! the cup composites, where the median depth and the capture's sparse points lie on it. The photos
+//! agree best at the reflections' depth, and there the color transfer lends the never-seen
+//! footprint the desk beside it, which the built-in fill needs more than the true surface
+//! (bench/JOURNAL.md, 2026-12-04). The captured photos tell the two apart: the
 //! photo-consistency the hole depth's correction measures (`photo_depth::DepthScale`, the color
 //! variance across the views that saw a completed point) is lower under the depth the photos
 //! agree with. On the real-photo bench (bench/JOURNAL.md, 2026-12-02) it was lower under the
 //! median depth on statue-two-of-three (0.0016 against 0.0020; held out 21.10 -> 22.20 dB) and
 //! under the expected depth on the cups (0.0092 against 0.0173; the median depth cost them
-//! 0.8-1.0 dB) and on statue-one (0.0016 against 0.0017, where the two score alike).
+//! 0.8-1.0 dB) and on statue-one (0.0016 against 0.0017, where the two score alike). Inpaintings
+//! that agree across views want the true surface instead: the photos of the background as
+//! `--inpainted`, without the transfer, scored 0.9-2.4 dB higher on statue-one and the cups
+//! forced to the median depth.
 //!
 //! `Auto` runs stages 2 to 3b under both (the hull too judges in the depth the views read: in the
 //! expected depth the median's completions on statue-two-of-three scored 0.00202, not 0.00162)
