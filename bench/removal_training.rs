@@ -4,7 +4,7 @@
 use crate::common::{self, cogeo, read_json, s};
 use crate::{
     CAPTURE_CEILING, CONSISTENT_SOURCE, DISAGREEING, DISAGREEING_ROTATIONS, DISAGREEING_SEEDS, PERFECT_INPAINTING,
-    SEEDED_VARIANTS,
+    PERFECT_INPAINTING_MEDIAN, SEEDED_VARIANTS,
 };
 use cogeo::pipeline::{self, Capture, Chosen, Layout, Objects};
 use serde_json::{json, Value};
@@ -231,7 +231,7 @@ impl Training<'_> {
                     }
                     RunSeeds::Default => None,
                 };
-                if *variant == PERFECT_INPAINTING {
+                if *variant == PERFECT_INPAINTING || *variant == PERFECT_INPAINTING_MEDIAN {
                     a.extend(s(&["--inpainted", &p(self.truth)]));
                 }
                 if let Some(seeds) = seeds {
