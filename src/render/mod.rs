@@ -78,6 +78,20 @@ impl SceneBuffers {
         })
     }
 
+    /// The trainable parameter tensors in a fixed order (means, log-scales, rotations, opacity
+    /// logits, SH), each with its number of floats.
+    pub fn parameters(&self) -> [(&Buffer, u32); 5] {
+        let n = self.num_gaussians;
+        let k = crate::scene::sh_coeffs(self.sh_degree) as u32;
+        [
+            (&self.means, 3 * n),
+            (&self.log_scales, 3 * n),
+            (&self.quats, 4 * n),
+            (&self.opacity_logits, n),
+            (&self.sh, 3 * k * n),
+        ]
+    }
+
     /// Puts `scene` (and `features`, N x D) in these buffers in place of the scene they hold: each
     /// attribute into its buffer where it fits, else into a new one half again as large, so that a
     /// run of parts of one scene (`SceneRenderer::upload`) soon stops allocating.

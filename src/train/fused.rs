@@ -106,10 +106,9 @@ impl ProjectBackwardAdam {
         movable: Option<&Buffer>,
     ) -> Result<()> {
         let n = scene.num_gaussians;
-        let tensors = [&scene.means, &scene.log_scales, &scene.quats, &scene.opacity_logits, &scene.sh];
         let step_of = |g: &GroupStep| AdamStep::new(g.moments.len, (g.lr, 1, 1, g.lr_tail), step);
         let params = FusedAdamParams {
-            params: tensors.map(|t| t.address()),
+            params: scene.parameters().map(|(t, _)| t.address()),
             moments: [0, 1, 2, 3, 4].map(|i| [groups[i].moments.m.address(), groups[i].moments.v.address()]),
             movable: movable.map_or(0, |b| b.address()),
             steps: [0, 1, 2, 3, 4].map(|i| step_of(&groups[i])),

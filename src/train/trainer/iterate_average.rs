@@ -10,7 +10,6 @@
 
 use super::Trainer;
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Recorder};
-use crate::render::SceneBuffers;
 use crate::shaders;
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
@@ -27,7 +26,8 @@ struct RunningMeanPush {
 /// The running mean of a trainer's parameters, one buffer per parameter tensor.
 pub struct IterateAverage {
     pipeline: ComputePipeline,
-    /// Means, log-scales, rotations, opacity logits and SH, as `SceneBuffers` orders them.
+    /// Means, log-scales, rotations, opacity logits and SH, as `SceneBuffers::parameters` orders
+    /// them.
     means: Vec<Buffer>,
     /// Floats per tensor.
     lengths: Vec<u32>,
@@ -35,25 +35,12 @@ pub struct IterateAverage {
     count: u32,
 }
 
-/// The parameter tensors of `scene` in a fixed order, with their float counts.
-fn tensors(scene: &SceneBuffers) -> [(&Buffer, u32); 5] {
-    let n = scene.num_gaussians;
-    let k = crate::scene::sh_coeffs(scene.sh_degree) as u32;
-    [
-        (&scene.means, 3 * n),
-        (&scene.log_scales, 3 * n),
-        (&scene.quats, 4 * n),
-        (&scene.opacity_logits, n),
-        (&scene.sh, 3 * k * n),
-    ]
-}
-
 impl IterateAverage {
     /// An empty average over the parameters `trainer` holds now (their number must not change:
     /// no densification while it runs).
     pub fn new(trainer: &Trainer) -> Result<IterateAverage> {
         let gpu = &trainer.gpu;
-        let tensors = tensors(&trainer.scene);
+        let tensors = trainer.scene.parameters();
         let means = tensors
             .iter()
             .map(|(_, len)| Buffer::zeroed(gpu, "iterate average", 4 * (*len).max(1) as u64))
@@ -102,7 +89,7 @@ impl IterateAverage {
 
     /// `trainer`'s parameter tensors, which must be as many floats as when the average began.
     fn tensors_of<'t>(&self, trainer: &'t Trainer) -> Result<[(&'t Buffer, u32); 5]> {
-        let tensors = tensors(&trainer.scene);
+        let tensors = trainer.scene.parameters();
         ensure!(
             tensors.iter().map(|(_, len)| *len).eq(self.lengths.iter().copied()),
             "the trainer's Gaussians changed while their iterates were averaged"
