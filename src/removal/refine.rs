@@ -91,6 +91,16 @@ pub const VIEW_DEPENDENCE: ViewDependence = ViewDependence::All;
 /// (bench/JOURNAL.md, 2026-12-02).
 pub const COVERAGE_WEIGHT: f32 = 0.0;
 
+/// Where the coverage term draws by default (`RefineConfig::coverage_on`): the pixels the color
+/// loss leaves out, where nothing else asks the patch to cover. On the transferred pixels at
+/// weight 1 the cups' held-out masked PSNR rose by 0.08-0.38 dB at each removal seed (cup-one
+/// 27.13 / 27.39 / 27.14 -> 27.46 / 27.47 / 27.52): there the refinement had fitted its targets
+/// at alpha 0.94-0.96 with brighter colors, which other directions do not share. But masked
+/// LPIPS rose by 0.005-0.011 on the cups and statue-one, the harmonic fill and nearest-copy moved
+/// with the full pipeline, and the statue's PSNR moved by 0.01-0.03 dB (bench/JOURNAL.md,
+/// 2026-12-04, 04:58).
+pub const COVERAGE_ON: CoverageOn = CoverageOn::LeftOut;
+
 /// Passes over the views whose iterates the refinement averages by default (`RefineConfig::
 /// average_passes`): one, so that every view pulls the result once. It steps one view at a time
 /// at a constant rate, and where the views' targets disagree (each view's own fill of the hole)
@@ -151,6 +161,10 @@ pub struct RefineConfig {
         value_parser = crate::flag_values::parse_weight
     )]
     pub coverage_weight: f32,
+    /// Which of a view's hole pixels the coverage term (`--refine-coverage-weight` above 0) draws
+    /// toward full opacity.
+    #[arg(id = "refine-coverage-on", long = "refine-coverage-on", value_enum, default_value_t = COVERAGE_ON)]
+    pub coverage_on: CoverageOn,
     /// Refinement loss weight of each view's hole pixels relative to its other pixels (>= 0;
     /// `loss_weights`). Outside the hole the target is the scene's own render, which only anchors
     /// the background; the hole is a tenth or so of a view and carries the colors the other views
@@ -212,6 +226,20 @@ pub enum ViewDependence {
     Kept,
     /// None: every moving Gaussian keeps the higher bands it has.
     None,
+}
+
+/// The hole pixels the coverage term draws toward full opacity (`coverage_gradients`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+pub enum CoverageOn {
+    /// Those whose color the loss does not weigh: the inventions the consensus left to their
+    /// owners.
+    LeftOut,
+    /// The fill pixels that took a photo's color: background some other view saw, where the
+    /// patch and the Gaussians left behind the objects can otherwise fit their targets at
+    /// partial opacity with brighter colors, a trade other directions do not share.
+    Transferred,
+    /// Every fill pixel.
+    Fill,
 }
 
 crate::default_from_flags!(RefineConfig);
@@ -287,21 +315,33 @@ pub fn movable_gaussians(
 }
 
 /// Per view, the coverage term's gradient by the rendered alpha (`RefineConfig::coverage_weight`):
-/// at the pixels whose color weight in `masks` (`loss_weights`) is zero, -`weight` times the hole
-/// weight over the sum of the view's `masks` (the color loss's normalization), so that such a
+/// at the pixels `drawn` (`CoverageOn`), -`weight` times the hole weight over the sum of the
+/// view's `masks` (the color loss's weights, `loss_weights`: its normalization), so that such a
 /// pixel left uncovered costs about what a color error of `weight` costs in a hole pixel that
-/// counts in full; 0 elsewhere. A weight is zero only where the consensus left an invention to
-/// its owners (`consensus::loss_masks`: invented pixels, all in the fill), or in the whole hole
-/// with a hole weight of 0, which makes the gradient 0 too.
-pub fn coverage_gradients(masks: &[Vec<f32>], hole_weight: f32, weight: f32) -> Vec<Vec<f32>> {
+/// counts in full; 0 elsewhere. With a hole weight of 0 the gradient is 0 too.
+pub fn coverage_gradients(masks: &[Vec<f32>], drawn: &[Vec<bool>], hole_weight: f32, weight: f32) -> Vec<Vec<f32>> {
     masks
         .iter()
-        .map(|mask| {
+        .zip(drawn)
+        .map(|(mask, drawn)| {
             let sum: f64 = mask.iter().map(|&w| w as f64).sum();
             let g = -(weight as f64 * hole_weight as f64 / sum.max(1.0)) as f32;
-            mask.iter().map(|&m| if m == 0.0 { g } else { 0.0 }).collect()
+            drawn.iter().map(|&d| if d { g } else { 0.0 }).collect()
         })
         .collect()
+}
+
+/// Per view, the pixels `on` names: of its `fill` (`MaskedView::fill`), those that took a photo's
+/// color (`transferred`; none where no transfer ran), or all; or those whose color weight in `mask`
+/// is zero (a weight is zero only where the consensus left an invention to its owners, all in
+/// the fill, or in the whole hole with a hole weight of 0).
+pub fn coverage_pixels(on: CoverageOn, mask: &[f32], fill: &[bool], transferred: Option<&[bool]>) -> Vec<bool> {
+    match (on, transferred) {
+        (CoverageOn::LeftOut, _) => mask.iter().map(|&m| m == 0.0).collect(),
+        (CoverageOn::Fill, _) => fill.to_vec(),
+        (CoverageOn::Transferred, Some(t)) => fill.iter().zip(t).map(|(&f, &t)| f && t).collect(),
+        (CoverageOn::Transferred, None) => vec![false; fill.len()],
+    }
 }
 
 /// The part of `camera`'s view the refinement needs: the bounding box of its `hole` and of the
@@ -500,21 +540,37 @@ mod tests {
         assert_eq!(plain, vec![vec![2.5, 2.5, 1.0, 1.0], vec![1.0, 2.5, 1.0, 2.5]]);
     }
 
-    /// The coverage term's gradient: only at the pixels the color loss does not weigh (an
-    /// invention left out of a hole pixel, weight 0 from `loss_weights`), the weight times the
-    /// hole weight over the view's weight sum, negative (coverage rewarded).
+    /// The coverage term's gradient: at the pixels drawn, the weight times the hole weight over
+    /// the view's weight sum (the color loss's normalization), negative (coverage rewarded).
     #[test]
-    fn coverage_pulls_only_pixels_the_color_loss_leaves_out() {
+    fn coverage_pulls_the_drawn_pixels_by_the_color_loss_normalization() {
         let holes = [[true, true, false, false]];
         let holes: Vec<&[bool]> = holes.iter().map(|h| &h[..]).collect();
         let masks = loss_weights(&holes, Some(vec![vec![0.0, 1.0, 1.0, 1.0]]), 4.0);
         assert_eq!(masks, vec![vec![0.0, 4.0, 1.0, 1.0]]);
-        let g = coverage_gradients(&masks, 4.0, 0.5);
+        let left_out = vec![coverage_pixels(CoverageOn::LeftOut, &masks[0], &[true, true, false, false], None)];
+        assert_eq!(left_out, vec![vec![true, false, false, false]]);
+        let g = coverage_gradients(&masks, &left_out, 4.0, 0.5);
         assert_eq!(g, vec![vec![-0.5 * 4.0 / 6.0, 0.0, 0.0, 0.0]]);
-        let none = coverage_gradients(&[vec![0.0, 0.0, 1.0, 1.0]], 4.0, 0.5);
+        let both = vec![vec![true, true, false, false]];
+        let none = coverage_gradients(&[vec![0.0, 0.0, 1.0, 1.0]], &both, 4.0, 0.5);
         assert_eq!(none, vec![vec![-1.0, -1.0, 0.0, 0.0]], "the sum 2: 0.5 x 4 / 2");
-        let tiny = coverage_gradients(&[vec![0.0, 0.5]], 4.0, 0.5);
+        let tiny = coverage_gradients(&[vec![0.0, 0.5]], &[vec![true, false]], 4.0, 0.5);
         assert_eq!(tiny, vec![vec![-2.0, 0.0]], "a weight sum under 1 counts as 1");
+    }
+
+    /// The pixels each choice draws: the transferred ones only inside the fill, none without a
+    /// transfer; the whole fill; the ones the color loss leaves out wherever they are.
+    #[test]
+    fn coverage_pixels_follow_the_choice() {
+        let mask = [0.0, 4.0, 4.0, 1.0];
+        let fill = [true, true, false, false];
+        let transferred = [false, true, true, false];
+        let on = |c| coverage_pixels(c, &mask, &fill, Some(&transferred));
+        assert_eq!(on(CoverageOn::Transferred), vec![false, true, false, false]);
+        assert_eq!(on(CoverageOn::Fill), vec![true, true, false, false]);
+        assert_eq!(on(CoverageOn::LeftOut), vec![true, false, false, false]);
+        assert_eq!(coverage_pixels(CoverageOn::Transferred, &mask, &fill, None), vec![false; 4]);
     }
 
     /// The default refines 150 iterations up to 25 views and 6 per view beyond (the cup
