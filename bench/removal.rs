@@ -10,7 +10,8 @@
 //!                                  --retrain 2 --lpips-model lpips.onnx --fid-model inception.onnx
 //!                                  --exposure-jitter 0.2 --variants "cogeo (full),removal only"
 //!                                  --real-downscale 1 --real-iters 800 --reuse-composites
-//!                                  --real-exposure cup --removal-seeds 3 --no-results]
+//!                                  --real-exposure cup --removal-seeds 3
+//!                                  --no-results --remove-args "--refine-coverage-weight 1"]
 //!
 //! `--scenes` names scenes, or the groups `synth` (the default: the three rooms), `real`
 //! (statue-one, statue-two-of-three, cup-one, cup-two-of-three; hours on 2 CPU cores at full
@@ -38,6 +39,10 @@
 //! `--removal-seeds N` runs the full pipeline and its rivals (`SEEDED_VARIANTS`) with `cogeo remove
 //! --seed` 0 to N-1 on the same training: each row is the run of median masked LPIPS, and the
 //! real scenes' first yardstick takes the median over the seeds of the difference at each seed.
+//! `--remove-args "..."` adds those flags to every `cogeo remove` the bench runs, to measure a
+//! lever on every variant and seed alike; it needs `--no-results` (a trial run, into a folder
+//! under the system's temporary directory: `common::results_path`), and a trial's real table
+//! keeps only the stored rows made with the same flags.
 //! `--exposure-jitter X` makes scenes whose views' exposure gains vary by +-X and runs only the
 //! full pipeline, on a training without and one with `--exposure`, into the `removal-exposure-table`
 //! markers instead.
@@ -146,6 +151,13 @@ const VARIANTS: [(&str, &str, &[&str]); 14] = [
 const RETRAIN_VARIANTS: [&str; 4] =
     ["cogeo (full)", "harmonic fill (no texture synthesis)", "no color transfer", "nearest-copy fill (GG-style)"];
 
+/// `--remove-args "--refine-coverage-weight 1 ..."`: flags added to every `cogeo remove` of every
+/// variant, split at whitespace; only on a trial run (`--no-results`), since the rows' names do not
+/// say them (each run's JSON does, `remove_args`).
+fn remove_args(args: &[String]) -> Vec<String> {
+    common::arg(args, "--remove-args").map_or(vec![], |f| f.split_whitespace().map(str::to_string).collect())
+}
+
 fn num(v: &Value, digits: usize) -> String {
     match v.as_f64() {
         Some(x) if x.is_finite() => format!("{x:.digits$}"),
@@ -164,6 +176,11 @@ fn main() {
     let repeat_full = args.iter().any(|a| a == "--repeat-full");
     let retrain: u64 = arg("--retrain", "0").parse().expect("--retrain takes a count");
     let removal_seeds: u64 = arg("--removal-seeds", "1").parse().expect("--removal-seeds takes a count");
+    let remove_args = remove_args(&args);
+    if !remove_args.is_empty() && !args.iter().any(|a| a == "--no-results") {
+        eprintln!("--remove-args changes every variant, which the table's rows do not name: add --no-results");
+        std::process::exit(2);
+    }
     // captures whose views' exposure varies: every scene trained without and with --exposure,
     // the full pipeline on each, scored with the held-out views' exposure fitted (its own table)
     let jitter = arg("--exposure-jitter", "0");
@@ -199,7 +216,7 @@ fn main() {
     let real: Vec<&removal_real::RealSpec> =
         removal_real::REAL_SCENES.iter().filter(|s| named(s.name, "real")).collect();
     if !real.is_empty() {
-        removal_real::run(&args, &real, &variants, &lpips, &fid, &root, removal_seeds);
+        removal_real::run(&args, &real, &variants, &lpips, &fid, &root, removal_seeds, &remove_args);
     }
     let synth: Vec<&SceneSpec> = SCENES.iter().filter(|s| named(s.name, "synth")).collect();
     if synth.is_empty() {
@@ -247,6 +264,7 @@ fn main() {
             reuse: None,
             original: None,
             removal_seeds,
+            remove_args: &remove_args,
         };
         for r in run.variants(&dir, spec.seed, &variants) {
             device = r["device"].as_str().unwrap_or("?").to_string();

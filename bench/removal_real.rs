@@ -192,7 +192,9 @@ fn resampled_capture(spec: &RealSpec, shared: &Path, factor: &str) -> PathBuf {
 
 /// Runs every real scene in `specs` with `variants` and writes their table (`removal-real-table`
 /// in bench/RESULTS.md, results/removal-real-<device>.json) and contact sheet; `removal_seeds`
-/// (`--removal-seeds`) runs of the full pipeline and its rivals each.
+/// (`--removal-seeds`) runs of the full pipeline and its rivals each, every `cogeo remove` with
+/// `remove_args` added (`--remove-args`).
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     args: &[String],
     specs: &[&RealSpec],
@@ -201,6 +203,7 @@ pub fn run(
     fid: &Option<String>,
     root: &Path,
     removal_seeds: u64,
+    remove_args: &[String],
 ) {
     let arg = |n: &str, d: &str| crate::common::arg(args, n).unwrap_or_else(|| d.to_string());
     // --real-downscale N, or per capture: statue=2,cup=4
@@ -256,6 +259,7 @@ pub fn run(
             reuse,
             original: Some(&capture_cache.join("scene.ply")),
             removal_seeds,
+            remove_args,
         };
         rows.extend(run.variants(&dir, spec.seed, variants));
         let at = |name: &str| variants.iter().position(|v| v.0 == name).map(|k| dir.join(format!("variant_{k}")));
@@ -293,8 +297,13 @@ pub fn run(
         let rerun = |r: &serde_json::Value| {
             r["scene"].as_str().is_some_and(|n| run.contains(&n)) && variants.iter().any(|v| r["variant"] == v.0)
         };
-        // a row of a variant since renamed or retired goes
-        let mut merged: Vec<serde_json::Value> = kept.filter(|r| !rerun(r) && variant_index(r).is_some()).collect();
+        // a row of a variant since renamed or retired goes, and one made with other
+        // `--remove-args` (rows before the flag have none)
+        let same_flags = |r: &serde_json::Value| {
+            r.get("remove_args").cloned().unwrap_or_else(|| serde_json::json!([])) == serde_json::json!(remove_args)
+        };
+        let mut merged: Vec<serde_json::Value> =
+            kept.filter(|r| !rerun(r) && variant_index(r).is_some() && same_flags(r)).collect();
         merged.append(&mut rows);
         rows = merged;
     }

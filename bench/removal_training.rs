@@ -34,6 +34,9 @@ pub struct Training<'a> {
     /// (`SEEDED_VARIANTS`, `--removal-seeds N`: seeds 0 to N-1): their row is the run of median
     /// masked LPIPS, every run's scores beside it. One seed: the default's one run.
     pub removal_seeds: u64,
+    /// Flags added to every `cogeo remove` the bench runs on this scene (`--remove-args`): a
+    /// lever measured on every variant and seed alike, on a trial run.
+    pub remove_args: &'a [String],
 }
 
 impl Training<'_> {
@@ -50,6 +53,7 @@ impl Training<'_> {
                 if !out.join("inpainted").is_dir() {
                     let mut a = pipeline::remove(tagged, &capture, Chosen::Labels(self.labels), &out);
                     a.extend(s(&["--no-refine", "--seed", &seed.to_string()]));
+                    a.extend(self.remove_args.iter().cloned());
                     if shared {
                         a.push("--share-inventions".into());
                     }
@@ -223,6 +227,7 @@ impl Training<'_> {
                 let out = if sources.len() > 1 { dir.join(format!("variant_{k}_run{r}")) } else { out.clone() };
                 let mut a = pipeline::remove(&tagged, &capture, Chosen::Labels(self.labels), &out);
                 a.extend(s(extra));
+                a.extend(self.remove_args.iter().cloned());
                 let seeds = match run_seeds {
                     RunSeeds::Inpainted(seeds) => Some(*seeds),
                     RunSeeds::Removal(seed) => {
@@ -247,7 +252,7 @@ impl Training<'_> {
                 let m = read_json(&out.join("metrics.json"));
                 runs.push(json!({
                     "scene": self.name, "removed_labels": self.labels, "variant": variant, "training_seed": seed,
-                    "exposure": self.exposure, "train_test_psnr_exposure_fitted": train_metrics["test"]["psnr_exposure_fitted"],
+                    "remove_args": self.remove_args, "exposure": self.exposure, "train_test_psnr_exposure_fitted": train_metrics["test"]["psnr_exposure_fitted"],
                     "device": report["device"], "train_test_psnr": train_metrics["test"]["psnr"],
                     "metrics": m, "stage_seconds": report["seconds"], "total_seconds": report["total_seconds"],
                     "peak_rss_mib": report["peak_rss_mib"], "gaussians": report["gaussians"],
