@@ -72,11 +72,16 @@ pub fn synthetic_scene(n: usize, degree: u32, seed: u64) -> GaussianScene {
     s
 }
 
-/// Where a bench writes `name` (JSON, tables, images): bench/results, or with `--no-results` (a
-/// trial run, which must leave the committed results as they are) a folder under the system's
-/// temporary directory.
+/// Whether `args` make a trial run (`--no-results`), which must leave the committed results as
+/// they are.
+pub fn trial_run(args: &[String]) -> bool {
+    args.iter().any(|a| a == "--no-results")
+}
+
+/// Where a bench writes `name` (JSON, tables, images): bench/results, or on a trial run
+/// (`trial_run`) a folder under the system's temporary directory.
 pub fn results_path(name: &str) -> PathBuf {
-    let folder = if args().iter().any(|a| a == "--no-results") {
+    let folder = if trial_run(&args()) {
         let trial = std::env::temp_dir().join("cogeo-bench-trial-results");
         std::fs::create_dir_all(&trial).unwrap_or_else(|e| panic!("cannot create {}: {e}", trial.display()));
         trial
@@ -274,7 +279,7 @@ impl Table {
 /// bench/RESULTS.md with `md`, so the file holds each bench's latest table and no hand-copied
 /// numbers. Skipped with `--no-results` among `args` (a trial run that should not replace them).
 pub fn update_results(args: &[String], section: &str, md: &str) {
-    if args.iter().any(|a| a == "--no-results" || a == "--no-readme") {
+    if trial_run(args) || args.iter().any(|a| a == "--no-readme") {
         return;
     }
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("bench/RESULTS.md");

@@ -177,7 +177,7 @@ fn main() {
     let retrain: u64 = arg("--retrain", "0").parse().expect("--retrain takes a count");
     let removal_seeds: u64 = arg("--removal-seeds", "1").parse().expect("--removal-seeds takes a count");
     let remove_args = remove_args(&args);
-    if !remove_args.is_empty() && !args.iter().any(|a| a == "--no-results") {
+    if !remove_args.is_empty() && !common::trial_run(&args) {
         eprintln!("--remove-args changes every variant, which the table's rows do not name: add --no-results");
         std::process::exit(2);
     }

@@ -434,13 +434,12 @@ fn refine_views(
 ) -> Result<(GaussianScene, RefineReport, Vec<Option<Rect>>)> {
     let holes: Vec<&[bool]> = views.iter().map(|v| v.masked.hole.as_slice()).collect();
     let mut masks = refine::loss_weights(&holes, consensus, opts.refine.hole_weight);
-    let mut drawn: Vec<Vec<bool>> = views
-        .iter()
-        .zip(&masks)
-        .map(|(v, mask)| {
-            refine::coverage_pixels(opts.refine.coverage_on, mask, &v.masked.fill, v.transferred.as_deref())
-        })
-        .collect();
+    // the pixels the coverage term draws, only where it weighs
+    let mut drawn: Option<Vec<Vec<bool>>> = (opts.refine.coverage_weight > 0.0).then(|| {
+        let on = opts.refine.coverage_on;
+        let per_view = views.iter().zip(&masks);
+        per_view.map(|(v, mask)| refine::coverage_pixels(on, mask, &v.masked.fill, v.transferred.as_deref())).collect()
+    });
     let mut targets: Vec<Vec<f32>> = views.iter().map(|v| v.completion().rgb.clone()).collect();
     let movable = (!opts.refine.all_gaussians)
         .then(|| refine::movable_gaussians(scene, cameras, &holes, patch_gaussians, opts.refine.view_dependence));
@@ -455,13 +454,15 @@ fn refine_views(
             let (w, h) = (cam.width as usize, cam.height as usize);
             targets[i] = crop(&targets[i], w, h, 3, win);
             masks[i] = crop(&masks[i], w, h, 1, win);
-            drawn[i] = crop(&drawn[i], w, h, 1, win);
+            if let Some(drawn) = drawn.as_mut() {
+                drawn[i] = crop(&drawn[i], w, h, 1, win);
+            }
             *cam = refine::window_camera(cam, win);
             windows[i] = Some(win);
         }
     }
-    let coverage = (opts.refine.coverage_weight > 0.0)
-        .then(|| refine::coverage_gradients(&masks, &drawn, opts.refine.hole_weight, opts.refine.coverage_weight));
+    let coverage =
+        drawn.map(|d| refine::coverage_gradients(&masks, &d, opts.refine.hole_weight, opts.refine.coverage_weight));
     let total = opts.refine.iterations(cameras.len()) as usize;
     let (refined, report) = refine::refine(
         gpu,
