@@ -21,14 +21,17 @@ pub fn harmonic_fill(values: &[f32], known: &[bool], w: usize, h: usize, channel
         }
         return out;
     }
+    // the grids depend on the mask alone: built once, shared by the planes
+    let pyramid = Pyramid::new(known, w, h);
     // the planes are independent: one thread each (the result does not depend on the threads)
     std::thread::scope(|scope| {
+        let pyramid = &pyramid;
         let jobs: Vec<_> = out
             .chunks_mut(w * h)
             .take(channels)
             .map(|plane| {
                 scope.spawn(move || {
-                    let filled = fill_plane(plane, known, w, h);
+                    let filled = pyramid.fill(plane, 0);
                     plane.copy_from_slice(&filled);
                 })
             })
@@ -92,22 +95,23 @@ impl Level {
             for &j in &s.neighbours[..s.count as usize] {
                 sum += x[j as usize];
             }
-            let new = (sum - b[i]) / s.count as f64;
+            // each pixel waits on its left neighbour's new value, so the division's latency was
+            // the sweep's; a quarter is the same number exactly (a power of two), and the pixels
+            // with fewer neighbours are the border's few
+            let new = if s.count == 4 { (sum - b[i]) * 0.25 } else { (sum - b[i]) / s.count as f64 };
             change = change.max((new - x[i]).abs());
             x[i] = new;
         }
         change
     }
 
-    /// b - A x at the unknown pixels, 0 elsewhere.
-    fn residual(&self, x: &[f64], b: &[f64]) -> Vec<f64> {
-        let mut r = vec![0f64; self.w * self.h];
+    /// b - A x at the unknown pixels, into `r` (its other entries untouched).
+    fn residual(&self, x: &[f64], b: &[f64], r: &mut [f64]) {
         for s in &self.stencils {
             let i = s.at as usize;
             let sum: f64 = s.neighbours[..s.count as usize].iter().map(|&j| x[j as usize] - x[i]).sum();
             r[i] = b[i] - sum;
         }
-        r
     }
 
     /// The next coarser level, or None when this one is small enough to solve by sweeps alone.
@@ -155,13 +159,23 @@ const TOLERANCE: f64 = 1e-6;
 /// a hundredth of TOLERANCE, at most this many times.
 const COARSEST_SWEEPS: usize = 1000;
 
-/// One V-cycle on `levels[k]` for A x = b: smooth, solve the residual's equation on the coarser
+/// A V-cycle's work space for one level and the next coarser one: the level's residual, its sums
+/// over the blocks (the coarser level's right-hand side) and the coarser level's correction.
+/// Reused from cycle to cycle; fresh zeroed images each cycle cost a tenth of a fill's time in
+/// page faults.
+struct Scratch {
+    residual: Vec<f64>,
+    rhs: Vec<f64>,
+    correction: Vec<f64>,
+}
+
+/// One V-cycle on `levels[0]` for A x = b: smooth, solve the residual's equation on the coarser
 /// level (the residual summed over each block: the stencil there spans twice the distance, so
-/// it is four times the fine one's), add the correction, smooth again. Returns the last sweep's
-/// largest change.
-fn v_cycle(levels: &[Level], k: usize, x: &mut [f64], b: &[f64]) -> f64 {
-    let level = &levels[k];
-    let Some(coarse) = levels.get(k + 1) else {
+/// it is four times the fine one's), add the correction, smooth again. `scratch[k]` is the work
+/// space of `levels[k]` and `levels[k + 1]`. Returns the last sweep's largest change.
+fn v_cycle(levels: &[Level], scratch: &mut [Scratch], x: &mut [f64], b: &[f64]) -> f64 {
+    let level = &levels[0];
+    let Some(coarse) = levels.get(1) else {
         let mut change = 0.0;
         for _ in 0..COARSEST_SWEEPS {
             change = level.sweep(x, b);
@@ -174,18 +188,20 @@ fn v_cycle(levels: &[Level], k: usize, x: &mut [f64], b: &[f64]) -> f64 {
     for _ in 0..SMOOTHING_SWEEPS {
         level.sweep(x, b);
     }
-    let r = level.residual(x, b);
-    let mut cb = vec![0f64; coarse.w * coarse.h];
+    let (Scratch { residual: r, rhs: cb, correction: e }, below) = scratch.split_first_mut().unwrap();
+    // (only the unknown pixels' entries of the residual are written and read)
+    level.residual(x, b, r);
+    cb.fill(0.0);
     for s in &level.stencils {
         let i = s.at as usize;
         cb[(i / level.w / 2) * coarse.w + (i % level.w) / 2] += r[i];
     }
     // (a known block's entry is never read: its correction stays 0)
-    let mut e = vec![0f64; coarse.w * coarse.h];
-    v_cycle(levels, k + 1, &mut e, &cb);
+    e.fill(0.0);
+    v_cycle(&levels[1..], below, e, cb);
     for s in &level.stencils {
         let i = s.at as usize;
-        x[i] += level.prolong(&e, coarse.w, coarse.h, i);
+        x[i] += level.prolong(e, coarse.w, coarse.h, i);
     }
     let mut change = 0.0;
     for _ in 0..SMOOTHING_SWEEPS {
@@ -194,53 +210,107 @@ fn v_cycle(levels: &[Level], k: usize, x: &mut [f64], b: &[f64]) -> f64 {
     change
 }
 
-fn fill_plane(values: &[f32], known: &[bool], w: usize, h: usize) -> Vec<f32> {
-    // initial guess: from the next coarser level (2x2 averages of the known pixels)
-    let mut x: Vec<f64> = if w > 8 && h > 8 {
-        let (cw, ch) = (w.div_ceil(2), h.div_ceil(2));
-        let mut cv = vec![0f32; cw * ch];
-        let mut ck = vec![false; cw * ch];
-        for cy in 0..ch {
-            for cx in 0..cw {
-                let (mut sum, mut n) = (0f32, 0);
-                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                    let (px, py) = (2 * cx + dx, 2 * cy + dy);
-                    if px < w && py < h && known[py * w + px] {
-                        sum += values[py * w + px];
-                        n += 1;
+/// One resolution of the coarse-to-fine solve: its known pixels (at the first, the mask; at each
+/// next, the 2x2 blocks that hold a known pixel) and its multigrid levels.
+struct Stage {
+    w: usize,
+    h: usize,
+    known: Vec<bool>,
+    levels: Vec<Level>,
+}
+
+/// The grids of one mask, every stage down to one at most 8 pixels across one way. They depend on
+/// the mask alone, so the planes of a fill share them.
+struct Pyramid {
+    stages: Vec<Stage>,
+}
+
+impl Pyramid {
+    fn new(known: &[bool], w: usize, h: usize) -> Pyramid {
+        let mut stages = vec![Stage::new(known.to_vec(), w, h)];
+        loop {
+            let last = stages.last().unwrap();
+            let (w, h) = (last.w, last.h);
+            if w <= 8 || h <= 8 {
+                break;
+            }
+            let (cw, ch) = (w.div_ceil(2), h.div_ceil(2));
+            let coarse: Vec<bool> = (0..cw * ch)
+                .map(|c| {
+                    let (cx, cy) = (c % cw, c / cw);
+                    [(0, 0), (1, 0), (0, 1), (1, 1)].iter().any(|&(dx, dy)| {
+                        let (px, py) = (2 * cx + dx, 2 * cy + dy);
+                        px < w && py < h && last.known[py * w + px]
+                    })
+                })
+                .collect();
+            stages.push(Stage::new(coarse, cw, ch));
+        }
+        Pyramid { stages }
+    }
+
+    /// The fill of stage `d`'s `values` (one plane).
+    fn fill(&self, values: &[f32], d: usize) -> Vec<f32> {
+        let Stage { w, h, ref known, ref levels } = self.stages[d];
+        // initial guess: from the next coarser stage (2x2 averages of the known pixels)
+        let mut x: Vec<f64> = if d + 1 < self.stages.len() {
+            let (cw, ch) = (w.div_ceil(2), h.div_ceil(2));
+            let mut cv = vec![0f32; cw * ch];
+            for cy in 0..ch {
+                for cx in 0..cw {
+                    let (mut sum, mut n) = (0f32, 0);
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let (px, py) = (2 * cx + dx, 2 * cy + dy);
+                        if px < w && py < h && known[py * w + px] {
+                            sum += values[py * w + px];
+                            n += 1;
+                        }
+                    }
+                    if n > 0 {
+                        cv[cy * cw + cx] = sum / n as f32;
                     }
                 }
-                if n > 0 {
-                    cv[cy * cw + cx] = sum / n as f32;
-                    ck[cy * cw + cx] = true;
-                }
+            }
+            let coarse = self.fill(&cv, d + 1);
+            (0..w * h)
+                .map(|i| if known[i] { values[i] as f64 } else { coarse[(i / w / 2) * cw + (i % w) / 2] as f64 })
+                .collect()
+        } else {
+            let mean = values.iter().zip(known).filter(|(_, &k)| k).map(|(&v, _)| v as f64).sum::<f64>()
+                / known.iter().filter(|&&k| k).count() as f64;
+            (0..w * h).map(|i| if known[i] { values[i] as f64 } else { mean }).collect()
+        };
+        // then multigrid V-cycles: Gauss-Seidel alone removes the initial guess's smooth error only
+        // over hundreds of sweeps (over-relaxed, it stopped at its cap of 400 on the statue's holes
+        // at 504x378: 190 ms a view for the three color planes; the completion stage 6.3 -> 3.6 s)
+        let mut scratch: Vec<Scratch> = levels
+            .windows(2)
+            .map(|pair| Scratch {
+                residual: vec![0f64; pair[0].w * pair[0].h],
+                rhs: vec![0f64; pair[1].w * pair[1].h],
+                correction: vec![0f64; pair[1].w * pair[1].h],
+            })
+            .collect();
+        let b = vec![0f64; w * h];
+        for _ in 0..MAX_CYCLES {
+            if v_cycle(levels, &mut scratch, &mut x, &b) < TOLERANCE {
+                break;
             }
         }
-        let coarse = fill_plane(&cv, &ck, cw, ch);
-        (0..w * h)
-            .map(|i| if known[i] { values[i] as f64 } else { coarse[(i / w / 2) * cw + (i % w) / 2] as f64 })
-            .collect()
-    } else {
-        let mean = values.iter().zip(known).filter(|(_, &k)| k).map(|(&v, _)| v as f64).sum::<f64>()
-            / known.iter().filter(|&&k| k).count() as f64;
-        (0..w * h).map(|i| if known[i] { values[i] as f64 } else { mean }).collect()
-    };
-    // then multigrid V-cycles: Gauss-Seidel alone removes the initial guess's smooth error only
-    // over hundreds of sweeps (over-relaxed, it stopped at its cap of 400 on the statue's holes at
-    // 504x378: 190 ms a view for the three color planes; the completion stage 6.3 -> 3.6 s there)
-    let mut unknown: Vec<bool> = known.iter().map(|&k| !k).collect();
-    let mut levels = vec![Level::new(&unknown, w, h)];
-    while let Some((next, coarse)) = levels.last().unwrap().coarser(&unknown) {
-        levels.push(next);
-        unknown = coarse;
+        x.into_iter().map(|v| v as f32).collect()
     }
-    let b = vec![0f64; w * h];
-    for _ in 0..MAX_CYCLES {
-        if v_cycle(&levels, 0, &mut x, &b) < TOLERANCE {
-            break;
+}
+
+impl Stage {
+    fn new(known: Vec<bool>, w: usize, h: usize) -> Stage {
+        let mut unknown: Vec<bool> = known.iter().map(|&k| !k).collect();
+        let mut levels = vec![Level::new(&unknown, w, h)];
+        while let Some((next, coarse)) = levels.last().unwrap().coarser(&unknown) {
+            levels.push(next);
+            unknown = coarse;
         }
+        Stage { w, h, known, levels }
     }
-    x.into_iter().map(|v| v as f32).collect()
 }
 
 #[cfg(test)]
