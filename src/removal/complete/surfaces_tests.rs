@@ -320,3 +320,36 @@ fn a_few_stray_colors_do_not_tint_the_membrane() {
     let checker: Vec<f32> = (0..3 * n).map(|k| 0.1 + 0.8 * (((k % n) % w / 4 + (k % n) / w / 4) % 2) as f32).collect();
     assert_eq!(typical_colors(&checker, &known, n, 3), known);
 }
+
+/// The membrane near the fill takes no boundary values past its margin: surface 1 is known at
+/// 0.2 in a strip left of the hole and at 1.0 in a strip 6 px right of it, all else is surface
+/// 2. With a margin of 4 px only the left strip bounds surface 1's membrane, a constant, so the
+/// hole is 0.2 (the closed form); in the fill window (the box grown by its own size) the right
+/// strip pulls the hole's right side up.
+#[test]
+fn the_membrane_near_the_fill_takes_no_boundary_values_past_its_margin() {
+    let (w, h) = (80, 48);
+    let n = w * h;
+    let (x, y) = (|p: usize| p % w, |p: usize| p / w);
+    let hole: Vec<bool> = (0..n).map(|p| (32..48).contains(&x(p)) && (16..32).contains(&y(p))).collect();
+    let left = |p: usize| (30..32).contains(&x(p)) && (16..32).contains(&y(p));
+    let right = |p: usize| (54..58).contains(&x(p)) && (16..32).contains(&y(p));
+    let labels: Vec<u8> = (0..n).map(|p| if hole[p] || left(p) || right(p) { 1 } else { 2 }).collect();
+    let value = |p: usize| {
+        if left(p) {
+            0.2
+        } else if right(p) {
+            1.0
+        } else {
+            0.5
+        }
+    };
+    let image: Vec<f32> = (0..3 * n).map(|k| value(k % n)).collect();
+    let near = fill_by_surface_near(&image, &hole, &labels, (w, h), 3, Boundary::EveryKnownPixel, 4);
+    let window = fill_by_surface(&image, &hole, &labels, w, h, 3, Boundary::EveryKnownPixel);
+    for k in (0..3 * n).filter(|&k| hole[k % n]) {
+        assert!((near[k] - 0.2).abs() < 1e-5, "pixel ({}, {}): {}", x(k % n), y(k % n), near[k]);
+    }
+    let highest = (0..3 * n).filter(|&k| hole[k % n]).map(|k| window[k]).fold(0.0f32, f32::max);
+    assert!(highest > 0.5, "the fill window's membrane reaches {highest} only");
+}
