@@ -41,7 +41,7 @@
 //! A CPU pass like edge_tone.rs, after the GPU inpainting: two box sums of the image per surface
 //! that holds inventions, a membrane of the known colors and a distance transform.
 
-use super::surfaces::{fill_by_surface_near, Boundary};
+use super::surfaces::{fill_by_surface_within, Boundary, SurfaceWindow};
 use crate::image_ops::{distance_to, masked_box_mean};
 
 /// Half the window of the local mean, in pixels: wider than the exemplar's patches (7 px), so
@@ -99,7 +99,15 @@ pub fn temper(
     if !random.iter().any(|&r| r) {
         return;
     }
-    let membrane = fill_by_surface_near(image, invented, surfaces, (w, h), 3, Boundary::TypicalColors, MEMBRANE_MARGIN);
+    let membrane = fill_by_surface_within(
+        image,
+        invented,
+        surfaces,
+        (w, h),
+        3,
+        Boundary::TypicalColors,
+        SurfaceWindow::Margin(MEMBRANE_MARGIN),
+    );
     let weight = membrane_weights(known, w, h);
     lower_contrast(rgb, &random, surfaces, w, h, contrast);
     follow_known_colors(rgb, &random, (&membrane, &weight), w, h);
@@ -127,14 +135,14 @@ pub fn parse_contrast(s: &str) -> Result<f32, String> {
 pub const MEMBRANE_FADE: f32 = 8.0;
 
 /// How far (pixels) around the inventions' bounding box the membrane takes its boundary values
-/// (`fill_by_surface_near`): four fades, past which a pixel's weight on it is under 2 %. In the
-/// fill window (the box grown by its own size) the membrane's per-surface solves took 15 of the
-/// statue `images_2` removal's 22 s of color transfer on lavapipe; at 32 px the transfer took 11.5
-/// s (at 16, 10.1) and the real scenes' hand runs (seed 0; cup-two-of-three seed 2) scored as in
-/// the fill window, masked PSNR / LPIPS statue-one 21.39 / 0.347 (21.40 / 0.350),
-/// statue-two-of-three 22.08 / 0.295 (22.08 / 0.296), cup-one 27.13 / 0.1445 (27.13 / 0.1445),
-/// cup-two-of-three 28.24 / 0.1306 (28.24 / 0.1307); at 16 within 0.01 dB and 0.001 of those
-/// (bench/JOURNAL.md, 2026-12-04, 07:20).
+/// (`SurfaceWindow::Margin`): four fades, past which a pixel's weight on it is under 2 %. Solved
+/// in the fill window instead (the box grown by its own size), the per-surface membranes took 15
+/// of the 22 s of color transfer of the statue `images_2` removal on lavapipe; at 32 px the
+/// transfer took 10.6-11.6 s. The real scenes' hand runs (seed 0; cup-two-of-three seed 2) scored
+/// as in the fill window, masked PSNR / LPIPS (the fill window's in brackets): statue-one 21.39 /
+/// 0.347 (21.40 / 0.350), statue-two-of-three 22.08 / 0.295 (22.08 / 0.296), cup-one 27.13 /
+/// 0.1445 (27.13 / 0.1445), cup-two-of-three 28.24 / 0.1306 (28.24 / 0.1307); at 16 px within
+/// 0.01 dB and 0.001 of those (bench/JOURNAL.md, 2026-12-04, 07:20).
 pub const MEMBRANE_MARGIN: usize = 32;
 
 /// Each pixel's weight on the membrane: exp(-d / MEMBRANE_FADE), d its distance to the nearest
@@ -328,8 +336,15 @@ mod tests {
         let image: Vec<f32> = (0..3 * n).map(|i| if invented[i % n] { 0.0 } else { 0.2 }).collect();
         let copies: Vec<f32> =
             (0..3 * n).map(|i| if invented[i % n] { 0.6 + 0.1 * rng.normal() as f32 } else { 0.2 }).collect();
-        let membrane =
-            fill_by_surface_near(&image, &invented, &surfaces, (w, h), 3, Boundary::TypicalColors, MEMBRANE_MARGIN);
+        let membrane = fill_by_surface_within(
+            &image,
+            &invented,
+            &surfaces,
+            (w, h),
+            3,
+            Boundary::TypicalColors,
+            SurfaceWindow::Margin(MEMBRANE_MARGIN),
+        );
         assert!(membrane.iter().all(|&v| (v - 0.2).abs() < 1e-4), "the membrane of a constant boundary");
         let weight = membrane_weights(&known, w, h);
         let mut after = copies.clone();

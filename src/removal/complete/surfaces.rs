@@ -537,38 +537,38 @@ pub fn fill_by_surface(
     channels: usize,
     boundary: Boundary,
 ) -> Vec<f32> {
-    fill_by_surface_in(image, fill, labels, (w, h), channels, boundary, |b| fill_window(b, w, h))
+    fill_by_surface_within(image, fill, labels, (w, h), channels, boundary, SurfaceWindow::Fill)
 }
 
-/// `fill_by_surface` in the fill's bounding box grown by `margin` pixels on every side: the known
-/// pixels of a surface farther out are no boundary values. Where only the fill's edge needs the
-/// membrane, this costs a fraction of the fill window's solve (which spans nine times the
-/// box's area, most of it unknown to any one surface).
-pub fn fill_by_surface_near(
+/// Where `fill_by_surface_within` solves each surface's membrane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SurfaceWindow {
+    /// `fill_window`: the fill's bounding box grown by its own size.
+    Fill,
+    /// The fill's bounding box grown by this many pixels: a surface's known pixels farther out
+    /// are no boundary values. Where only the fill's edge needs the membrane, this costs a
+    /// fraction of the fill window's solve, which spans nine times the box's area, most of it
+    /// unknown to any one surface.
+    Margin(usize),
+}
+
+/// `fill_by_surface` with each surface's membrane solved in `window`.
+pub fn fill_by_surface_within(
     image: &[f32],
     fill: &[bool],
     labels: &[u8],
     (w, h): (usize, usize),
     channels: usize,
     boundary: Boundary,
-    margin: usize,
-) -> Vec<f32> {
-    fill_by_surface_in(image, fill, labels, (w, h), channels, boundary, |b| b.grown(margin, margin, w, h))
-}
-
-fn fill_by_surface_in(
-    image: &[f32],
-    fill: &[bool],
-    labels: &[u8],
-    (w, h): (usize, usize),
-    channels: usize,
-    boundary: Boundary,
-    window: impl Fn(Rect) -> Rect,
+    window: SurfaceWindow,
 ) -> Vec<f32> {
     let known: Vec<bool> = fill.iter().map(|&m| !m).collect();
     let mut out = harmonic_fill(image, &known, w, h, channels);
     let Some(b) = bounding_box(fill, w) else { return out };
-    let win = window(b);
+    let win = match window {
+        SurfaceWindow::Fill => fill_window(b, w, h),
+        SurfaceWindow::Margin(m) => b.grown(m, m, w, h),
+    };
     let (cw, ch) = (win.width(), win.height());
     let at = |x: usize, y: usize| (win.y0 + y) * w + win.x0 + x;
     let window = crop(image, w, h, channels, win);

@@ -345,7 +345,8 @@ fn the_membrane_near_the_fill_takes_no_boundary_values_past_its_margin() {
         }
     };
     let image: Vec<f32> = (0..3 * n).map(|k| value(k % n)).collect();
-    let near = fill_by_surface_near(&image, &hole, &labels, (w, h), 3, Boundary::EveryKnownPixel, 4);
+    let near =
+        fill_by_surface_within(&image, &hole, &labels, (w, h), 3, Boundary::EveryKnownPixel, SurfaceWindow::Margin(4));
     let window = fill_by_surface(&image, &hole, &labels, w, h, 3, Boundary::EveryKnownPixel);
     for k in (0..3 * n).filter(|&k| hole[k % n]) {
         assert!((near[k] - 0.2).abs() < 1e-5, "pixel ({}, {}): {}", x(k % n), y(k % n), near[k]);
