@@ -22,6 +22,12 @@ pub fn arg(args: &[String], name: &str) -> Option<String> {
     args.iter().position(|a| a == name).and_then(|i| args.get(i + 1).cloned())
 }
 
+/// `--remove-args "--refine-coverage-weight 1 ..."` among `args`: flags a removal bench adds to
+/// every `cogeo remove` it runs, split at whitespace (none without the option).
+pub fn remove_args(args: &[String]) -> Vec<String> {
+    arg(args, "--remove-args").map_or(vec![], |f| f.split_whitespace().map(str::to_string).collect())
+}
+
 /// Comma-separated counts of `--name` (e.g. --sizes 100000,1000000), or `default`.
 pub fn counts(args: &[String], name: &str, default: &str) -> Vec<usize> {
     arg(args, name)

@@ -151,13 +151,6 @@ const VARIANTS: [(&str, &str, &[&str]); 14] = [
 const RETRAIN_VARIANTS: [&str; 4] =
     ["cogeo (full)", "harmonic fill (no texture synthesis)", "no color transfer", "nearest-copy fill (GG-style)"];
 
-/// `--remove-args "--refine-coverage-weight 1 ..."`: flags added to every `cogeo remove` of every
-/// variant, split at whitespace; only on a trial run (`--no-results`), since the rows' names do not
-/// say them (each run's JSON does, `remove_args`).
-fn remove_args(args: &[String]) -> Vec<String> {
-    common::arg(args, "--remove-args").map_or(vec![], |f| f.split_whitespace().map(str::to_string).collect())
-}
-
 fn num(v: &Value, digits: usize) -> String {
     match v.as_f64() {
         Some(x) if x.is_finite() => format!("{x:.digits$}"),
@@ -176,7 +169,9 @@ fn main() {
     let repeat_full = args.iter().any(|a| a == "--repeat-full");
     let retrain: u64 = arg("--retrain", "0").parse().expect("--retrain takes a count");
     let removal_seeds: u64 = arg("--removal-seeds", "1").parse().expect("--removal-seeds takes a count");
-    let remove_args = remove_args(&args);
+    // added to every variant's removals: only on a trial run (`--no-results`), since the rows'
+    // names do not say them (each run's JSON does, `remove_args`)
+    let remove_args = common::remove_args(&args);
     if !remove_args.is_empty() && !common::trial_run(&args) {
         eprintln!("--remove-args changes every variant, which the table's rows do not name: add --no-results");
         std::process::exit(2);

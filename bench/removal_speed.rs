@@ -36,9 +36,7 @@ fn main() {
     if let Some(b) = &baseline {
         assert!(b.is_file(), "--baseline {}: no such binary", b.display());
     }
-    let extra: Vec<String> = common::arg(&args, "--remove-args")
-        .map(|a| a.split_whitespace().map(String::from).collect())
-        .unwrap_or_default();
+    let extra = common::remove_args(&args);
     let capture = common::shared_capture(CAPTURE);
     assert!(capture.is_dir(), "{}: the shared capture is missing", capture.display());
     let cache = prepare(&capture);
