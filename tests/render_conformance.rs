@@ -182,25 +182,6 @@ fn rendering_is_deterministic_across_calls_and_buffer_reuse() {
     assert_eq!(a.n_contrib, b.n_contrib);
 }
 
-/// A context builds each pipeline once (`gpu::pipeline`'s cache): a second rasterizer, made after
-/// the first is gone, builds none and renders the same bits through the pipelines the first built.
-#[test]
-fn a_second_rasterizer_builds_no_pipeline_and_renders_the_same_bits() {
-    let scene = random_scene(81, 1, SceneMix::default());
-    let g = gpu();
-    let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
-    let (cam, settings) = (test_camera(64, 48), RenderSettings { median_depth: true, ..Default::default() });
-    let mut first = Rasterizer::new(&g).unwrap();
-    let a = first.render(&buffers, &cam, &settings).unwrap();
-    let built = g.pipelines_built();
-    assert!(built >= 4, "the render built {built} pipelines");
-    drop(first);
-    let mut second = Rasterizer::new(&g).unwrap();
-    let b = second.render(&buffers, &cam, &settings).unwrap();
-    assert_eq!(g.pipelines_built(), built);
-    assert_eq!((a.rgb, a.alpha, a.median_depth), (b.rgb, b.alpha, b.median_depth));
-}
-
 #[test]
 fn every_blend_layout_renders_the_same_bits() {
     // blend.comp and blend_features.comp give each invocation a column of 1..16 pixels (render::BlendLayout::for_device picks per

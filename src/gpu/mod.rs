@@ -87,8 +87,6 @@ pub(crate) struct GpuShared {
     pub(crate) memory_in_use: AtomicU64,
     pub(crate) memory_limit: u64,
     pub(crate) memory_limit_set: bool,
-    /// Every pipeline built in this context, each once (`pipeline.rs`).
-    pub(crate) pipelines: pipeline::PipelineCache,
 }
 
 /// Counts of the host's waits on the device, so benches can report them per iteration.
@@ -447,7 +445,6 @@ impl Gpu {
                 memory_in_use: AtomicU64::new(0),
                 memory_limit,
                 memory_limit_set: choice.memory_limit_mib.is_some(),
-                pipelines: Default::default(),
             }),
         })
     }
@@ -464,12 +461,6 @@ impl Gpu {
     pub fn round_trips(&self) -> RoundTrips {
         let c = &self.shared.round_trips;
         RoundTrips { submits: c.submits.load(Ordering::Relaxed), readbacks: c.readbacks.load(Ordering::Relaxed) }
-    }
-
-    /// How many pipelines this context has compiled (each shader and specialization once,
-    /// `pipeline.rs`).
-    pub fn pipelines_built(&self) -> usize {
-        self.shared.pipelines.compiled()
     }
 
     /// Validation messages (warnings and errors) seen so far; empty without validation.
@@ -497,7 +488,6 @@ impl Drop for GpuShared {
     fn drop(&mut self) {
         unsafe {
             let _ = self.device.device_wait_idle();
-            self.pipelines.destroy(&self.device);
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             if let Some((loader, messenger, log)) = self.debug.take() {
