@@ -296,7 +296,6 @@ fn colmap_binary_and_text_agree() {
 #[test]
 fn statue_colmap_model_loads_and_points_project_into_the_views() {
     let Some(dir) = common::shared_data("statue") else {
-        eprintln!("shared/data/statue not present; skipping");
         return;
     };
     let model = read_colmap(&dir).unwrap();

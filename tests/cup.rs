@@ -13,7 +13,6 @@ fn psnr(a: &[f32], b: &[f32]) -> f64 {
 #[test]
 fn the_cup_trains_and_renders_with_each_images_own_camera() {
     let Some(cup) = common::shared_data("cup") else {
-        eprintln!("shared/data/cup not present; skipping");
         return;
     };
     // every image keeps its own intrinsics, scaled by --downscale

@@ -3,6 +3,8 @@
 //! taken directly at the lower resolution with N x N rays per pixel (`cogeo synth --supersample N`),
 //! which is what an area-integrating camera of that resolution records.
 
+mod common;
+
 use cogeo::scene::dataset::{box_downscale, load};
 use cogeo::synth::{generate, SynthConfig};
 
@@ -157,11 +159,9 @@ fn transposed_rotations_are_detected_and_undone() {
 
 #[test]
 fn statue_capture_rotations_are_repaired() {
-    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/data/statue");
-    if !dir.exists() {
-        eprintln!("shared/data/statue not present; skipping");
+    let Some(dir) = common::shared_data("statue") else {
         return;
-    }
+    };
     let d = load(&dir, "images_2", 4).unwrap();
     let c = d.pose_check.unwrap();
     // as stored, the points match the photos hardly better than unrelated pixels; transposed, they

@@ -129,7 +129,6 @@ fn ascii_and_any_property_order_read_identically() {
 #[test]
 fn guitar_round_trip_reproduces_the_file_byte_for_byte() {
     let Some(path) = shared_data("splats/guitar.ply") else {
-        eprintln!("shared/data/splats/guitar.ply not present; skipping");
         return;
     };
     let scene = read_ply(&path).unwrap();

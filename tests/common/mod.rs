@@ -62,9 +62,35 @@ pub fn gpu() -> TestGpu {
     TestGpu(gpu)
 }
 
+/// `../shared/<rel>` beside the checkout (real captures, splats, networks), or None when it is
+/// not there and the test should skip. The harness counts a skipped test as passed, so a skip is
+/// also appended to the file `COGEO_SKIPPED_LOG` names (`scripts/test.sh` lists them at the end),
+/// and with `COGEO_REQUIRE_SHARED=1` (the GPU checks, when all the data travelled) it fails.
+pub fn shared(rel: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared").join(rel);
+    if p.exists() {
+        return Some(p);
+    }
+    // the test binary's name without cargo's hash, and the test's (the harness names its thread so)
+    let exe = std::env::current_exe().ok().and_then(|e| e.file_stem().map(|s| s.to_string_lossy().into_owned()));
+    let exe = exe.unwrap_or_default();
+    let binary = exe.rsplit_once('-').map_or(exe.as_str(), |(name, _)| name);
+    let test = format!("{binary} {}", std::thread::current().name().unwrap_or("?"));
+    let required = std::env::var("COGEO_REQUIRE_SHARED").is_ok_and(|v| v == "1");
+    assert!(!required, "{test}: ../shared/{rel} is missing (COGEO_REQUIRE_SHARED=1)");
+    eprintln!("{test}: ../shared/{rel} not present; skipping");
+    if let Some(log) = std::env::var_os("COGEO_SKIPPED_LOG") {
+        use std::io::Write;
+        let file = std::fs::OpenOptions::new().create(true).append(true).open(log);
+        file.and_then(|mut f| writeln!(f, "{test}: ../shared/{rel} not present"))
+            .expect("cannot write COGEO_SKIPPED_LOG");
+    }
+    None
+}
+
+/// `shared("data/<rel>")`: a real capture or splat.
 pub fn shared_data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join("shared").join("data").join(rel);
-    p.exists().then_some(p)
+    shared(&format!("data/{rel}"))
 }
 
 /// What kinds of Gaussians a random scene mixes in.
