@@ -224,3 +224,65 @@ impl Drop for Buffer {
         }
     }
 }
+
+/// Reads several buffers back at once. A discrete GPU's device memory is not mapped, and
+/// `Buffer::download` pays a staging buffer, a submission and a wait for each buffer: a render's
+/// seven output planes took seven of each, for windows of a few thousand pixels (the hull and the
+/// hole masks render 300 of them). Here one staging buffer, kept and grown between calls, takes
+/// every copy of one submission. Where the buffers are mapped (lavapipe, integrated GPUs) each is
+/// copied directly, as `download` does.
+#[derive(Default)]
+pub struct Readback {
+    staging: Option<Buffer>,
+    /// Through the staging buffer even where the buffers are mapped (tests of that path).
+    pub always_stage: bool,
+}
+
+impl Readback {
+    /// Fills each `(buffer, out)` with the first `out.len()` bytes of `buffer`. Waits for completion.
+    pub fn read_into(&mut self, gpu: &Gpu, parts: &mut [(&Buffer, &mut [u8])]) -> Result<()> {
+        if let Some((b, out)) = parts.iter().find(|(b, out)| out.len() as u64 > b.size) {
+            return Err(anyhow!("readback of {} bytes from a buffer of {} bytes", out.len(), b.size));
+        }
+        let mapped: Option<Vec<*mut u8>> = parts.iter().map(|(b, _)| b.mapped()).collect();
+        if let (Some(mapped), false) = (mapped, self.always_stage) {
+            for ((_, out), ptr) in parts.iter_mut().zip(mapped).filter(|((_, out), _)| !out.is_empty()) {
+                unsafe { std::ptr::copy_nonoverlapping(ptr, out.as_mut_ptr(), out.len()) };
+                gpu.shared.round_trips.readbacks.fetch_add(1, Ordering::Relaxed);
+            }
+            return Ok(());
+        }
+        // each part at a 16-byte aligned offset of the staging buffer
+        let offsets: Vec<u64> = parts
+            .iter()
+            .scan(0u64, |next, (_, out)| {
+                let at = *next;
+                *next += (out.len() as u64).div_ceil(16) * 16;
+                Some(at)
+            })
+            .collect();
+        let total = parts.last().map_or(0, |(_, out)| offsets[parts.len() - 1] + out.len() as u64);
+        if total == 0 {
+            return Ok(());
+        }
+        if self.staging.as_ref().is_none_or(|s| s.size < total) {
+            self.staging = None;
+            // grown by powers of two: windows of every size follow one another
+            self.staging = Some(Buffer::new(gpu, "readback staging", total.next_power_of_two(), MemoryKind::Readback)?);
+        }
+        let staging = self.staging.as_ref().unwrap();
+        let mut rec = super::Recorder::new(gpu)?;
+        for ((src, out), &at) in parts.iter().zip(&offsets) {
+            if !out.is_empty() {
+                rec.copy_region(src, 0, staging, at, out.len() as u64);
+            }
+        }
+        rec.submit_and_wait()?;
+        gpu.shared.round_trips.readbacks.fetch_add(1, Ordering::Relaxed);
+        let ptr = staging.mapped().ok_or_else(|| anyhow!("readback staging memory is not mapped"))?;
+        for ((_, out), &at) in parts.iter_mut().zip(&offsets) {
+            unsafe { std::ptr::copy_nonoverlapping(ptr.add(at as usize), out.as_mut_ptr(), out.len()) };
+        }
+        Ok(())
+    }
+}

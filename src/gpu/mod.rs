@@ -7,7 +7,7 @@ mod buffer;
 mod commands;
 mod pipeline;
 
-pub use buffer::{Buffer, MemoryKind};
+pub use buffer::{Buffer, MemoryKind, Readback};
 pub use commands::{PassTiming, Recorder};
 pub use pipeline::ComputePipeline;
 
@@ -98,7 +98,7 @@ pub(crate) struct RoundTripCounters {
 
 /// Host round trips counted since the context was made: `submits` (each submission waits for its
 /// fence) and `readbacks` (device data copied to the host; on a discrete GPU each is a submission of
-/// its own as well).
+/// its own as well, and a `Readback` of several buffers counts one).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RoundTrips {
     pub submits: u64,

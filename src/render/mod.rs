@@ -13,7 +13,7 @@ pub mod reference;
 mod scene_renderer;
 pub(crate) mod specialized;
 
-use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Recorder};
+use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Readback, Recorder};
 use crate::scene::{Camera, GaussianScene, MAX_SH_DEGREE};
 use crate::shaders;
 use crate::sort::{self, scan, RadixSort};
@@ -256,6 +256,8 @@ pub struct Rasterizer {
     frame: Option<FrameBuffers>,
     isect: Option<IntersectionBuffers>,
     image: Option<ImageBuffers>,
+    /// The output planes' way back to the host: one submission for all of them.
+    readback: Readback,
 }
 
 /// Capacity to allocate for `n` elements: headroom so growing scenes do not reallocate every time.
@@ -290,6 +292,7 @@ impl Rasterizer {
             frame: None,
             isect: None,
             image: None,
+            readback: Readback::default(),
         })
     }
 
@@ -488,23 +491,48 @@ impl Rasterizer {
         Ok((Frame { params, num_intersections: m, median_depth: settings.median_depth, timings }, rec))
     }
 
+    /// Reads the outputs back through a staging buffer even where the device memory is mapped: a
+    /// discrete GPU's path, for tests on any device.
+    pub fn stage_readbacks(&mut self, always: bool) {
+        self.readback.always_stage = always;
+    }
+
     /// Reads a frame's outputs back to the host.
-    pub fn read_output(&self, frame: &Frame) -> Result<RenderOutput> {
+    pub fn read_output(&mut self, frame: &Frame) -> Result<RenderOutput> {
         let image = self.image.as_ref().unwrap();
         let (width, height, feature_dim) = (frame.params.width, frame.params.height, frame.params.feature_dim);
         let hw = (width * height) as usize;
-        let g = &self.gpu;
+        let plane = |used: bool, n: usize| vec![0f32; if used { n } else { 0 }];
+        let (mut rgb, mut alpha, mut depth, mut expected_depth) =
+            (plane(true, 3 * hw), plane(true, hw), plane(true, hw), plane(true, hw));
+        let (mut median_depth, mut final_t) = (plane(frame.median_depth, hw), plane(true, hw));
+        let mut features = plane(feature_dim > 0, feature_dim as usize * hw);
+        let mut n_contrib = vec![0u32; hw];
+        let bytes = bytemuck::cast_slice_mut;
+        self.readback.read_into(
+            &self.gpu,
+            &mut [
+                (&image.rgb, bytes(&mut rgb)),
+                (&image.alpha, bytes(&mut alpha)),
+                (&image.depth, bytes(&mut depth)),
+                (&image.expected_depth, bytes(&mut expected_depth)),
+                (&image.median_depth, bytes(&mut median_depth)),
+                (&image.final_t, bytes(&mut final_t)),
+                (&image.n_contrib, bytemuck::cast_slice_mut(&mut n_contrib)),
+                (&image.features, bytes(&mut features)),
+            ],
+        )?;
         Ok(RenderOutput {
             width,
             height,
-            rgb: image.rgb.download(g, 3 * hw)?,
-            alpha: image.alpha.download(g, hw)?,
-            depth: image.depth.download(g, hw)?,
-            expected_depth: image.expected_depth.download(g, hw)?,
-            median_depth: if frame.median_depth { image.median_depth.download(g, hw)? } else { Vec::new() },
-            final_t: image.final_t.download(g, hw)?,
-            n_contrib: image.n_contrib.download(g, hw)?,
-            features: if feature_dim > 0 { image.features.download(g, feature_dim as usize * hw)? } else { Vec::new() },
+            rgb,
+            alpha,
+            depth,
+            expected_depth,
+            median_depth,
+            final_t,
+            n_contrib,
+            features,
             feature_dim,
             num_intersections: frame.num_intersections,
             timings: frame.timings.clone(),
