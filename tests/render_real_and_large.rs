@@ -153,8 +153,8 @@ fn out_of_memory_is_a_clear_error_naming_sizes() {
 
 /// `Readback` through its staging buffer (a discrete GPU's path; lavapipe's memory is mapped, so it
 /// is forced here): every part exactly, an empty one, sizes that are not multiples of its 16-byte
-/// offsets, a staging buffer grown for a larger call, all in one submission, and a part longer
-/// than its buffer refused.
+/// offsets, a staging buffer grown for a larger call, all in one submission, a part read from an
+/// offset, and a part longer than its buffer refused.
 #[test]
 fn readback_through_one_staging_buffer_returns_every_part_exactly() {
     use cogeo::gpu::{Buffer, Readback};
@@ -170,16 +170,20 @@ fn readback_through_one_staging_buffer_returns_every_part_exactly() {
             .collect();
         let mut outs: Vec<Vec<u32>> = sizes.iter().map(|&n| vec![0; n]).collect();
         let before = g.round_trips();
-        let mut parts: Vec<(&Buffer, &mut [u8])> =
-            buffers.iter().zip(outs.iter_mut()).map(|(b, o)| (b, bytemuck::cast_slice_mut(o))).collect();
+        let mut parts: Vec<(&Buffer, u64, &mut [u8])> =
+            buffers.iter().zip(outs.iter_mut()).map(|(b, o)| (b, 0, bytemuck::cast_slice_mut(o))).collect();
         staged.read_into(&g, &mut parts).unwrap();
         let trips = g.round_trips() - before;
         assert_eq!((trips.submits, trips.readbacks), (1, 1), "sizes {sizes:?}");
         assert_eq!(outs, sources, "sizes {sizes:?}");
+        // a part from an element on, as `Buffer::download_at` reads
+        let mut tail = vec![0u32; sizes[0] - 2];
+        staged.read_into(&g, &mut [(&buffers[0], 8, bytemuck::cast_slice_mut(&mut tail))]).unwrap();
+        assert_eq!(tail, sources[0][2..], "sizes {sizes:?}");
     }
     let small = Buffer::from_slice(&g, "small", &[1u32, 2]).unwrap();
     let mut three = [0u32; 3];
-    let err = staged.read_into(&g, &mut [(&small, bytemuck::cast_slice_mut(&mut three))]).unwrap_err();
+    let err = staged.read_into(&g, &mut [(&small, 0, bytemuck::cast_slice_mut(&mut three))]).unwrap_err();
     assert!(format!("{err}").contains("12 bytes from a buffer of 8 bytes"), "{err}");
 }
 

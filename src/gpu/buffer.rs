@@ -178,28 +178,9 @@ impl Buffer {
 
     /// Reads back `count` elements starting at element `first`. Waits for completion.
     pub fn download_at<T: bytemuck::Pod>(&self, gpu: &Gpu, first: u64, count: usize) -> Result<Vec<T>> {
-        let elem = std::mem::size_of::<T>() as u64;
-        let offset = first * elem;
-        let bytes = count as u64 * elem;
-        if offset + bytes > self.size {
-            return Err(anyhow!("download of {bytes} bytes from a buffer of {} bytes", self.size));
-        }
         let mut out = vec![T::zeroed(); count];
-        if count == 0 {
-            return Ok(out);
-        }
-        let out_bytes: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
-        self.gpu.round_trips.readbacks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        if let Some(ptr) = self.mapped() {
-            unsafe { std::ptr::copy_nonoverlapping(ptr.add(offset as usize), out_bytes.as_mut_ptr(), out_bytes.len()) };
-            return Ok(out);
-        }
-        let staging = Buffer::new(gpu, "staging readback", bytes, MemoryKind::Readback)?;
-        let mut rec = super::Recorder::new(gpu)?;
-        rec.copy_region(self, offset, &staging, 0, bytes);
-        rec.submit_and_wait()?;
-        let ptr = staging.mapped().ok_or_else(|| anyhow!("readback staging memory is not mapped"))?;
-        unsafe { std::ptr::copy_nonoverlapping(ptr, out_bytes.as_mut_ptr(), out_bytes.len()) };
+        let offset = first * std::mem::size_of::<T>() as u64;
+        Readback::default().read_into(gpu, &mut [(self, offset, bytemuck::cast_slice_mut(&mut out))])?;
         Ok(out)
     }
 
@@ -225,12 +206,12 @@ impl Drop for Buffer {
     }
 }
 
-/// Reads several buffers back at once. A discrete GPU's device memory is not mapped, and
-/// `Buffer::download` pays a staging buffer, a submission and a wait for each buffer: a render's
-/// seven output planes took seven of each, for windows of a few thousand pixels (the hull and the
-/// hole masks render 300 of them). Here one staging buffer, kept and grown between calls, takes
-/// every copy of one submission. Where the buffers are mapped (lavapipe, integrated GPUs) each is
-/// copied directly, as `download` does.
+/// Reads several buffers back at once. A discrete GPU's device memory is not mapped: each read
+/// goes through a staging buffer, a submission and a wait. A render's seven output planes read one
+/// by one (`Buffer::download`) took seven of each, for windows of a few thousand pixels (the hull
+/// and the hole masks render 300 of them). Here one staging buffer, kept and grown between calls,
+/// takes every copy of one submission. Where the buffers are mapped (lavapipe, integrated GPUs)
+/// each is copied directly.
 #[derive(Default)]
 pub struct Readback {
     staging: Option<Buffer>,
@@ -239,15 +220,16 @@ pub struct Readback {
 }
 
 impl Readback {
-    /// Fills each `(buffer, out)` with the first `out.len()` bytes of `buffer`. Waits for completion.
-    pub fn read_into(&mut self, gpu: &Gpu, parts: &mut [(&Buffer, &mut [u8])]) -> Result<()> {
-        if let Some((b, out)) = parts.iter().find(|(b, out)| out.len() as u64 > b.size) {
-            return Err(anyhow!("readback of {} bytes from a buffer of {} bytes", out.len(), b.size));
+    /// Fills each `(buffer, offset, out)` with the `out.len()` bytes of `buffer` from byte
+    /// `offset` on. Waits for completion.
+    pub fn read_into(&mut self, gpu: &Gpu, parts: &mut [(&Buffer, u64, &mut [u8])]) -> Result<()> {
+        if let Some((b, _, out)) = parts.iter().find(|(b, offset, out)| offset + out.len() as u64 > b.size) {
+            return Err(anyhow!("download of {} bytes from a buffer of {} bytes", out.len(), b.size));
         }
-        let mapped: Option<Vec<*mut u8>> = parts.iter().map(|(b, _)| b.mapped()).collect();
+        let mapped: Option<Vec<*mut u8>> = parts.iter().map(|(b, _, _)| b.mapped()).collect();
         if let (Some(mapped), false) = (mapped, self.always_stage) {
-            for ((_, out), ptr) in parts.iter_mut().zip(mapped).filter(|((_, out), _)| !out.is_empty()) {
-                unsafe { std::ptr::copy_nonoverlapping(ptr, out.as_mut_ptr(), out.len()) };
+            for ((_, offset, out), ptr) in parts.iter_mut().zip(mapped).filter(|((_, _, out), _)| !out.is_empty()) {
+                unsafe { std::ptr::copy_nonoverlapping(ptr.add(*offset as usize), out.as_mut_ptr(), out.len()) };
                 gpu.shared.round_trips.readbacks.fetch_add(1, Ordering::Relaxed);
             }
             return Ok(());
@@ -255,32 +237,34 @@ impl Readback {
         // each part at a 16-byte aligned offset of the staging buffer
         let offsets: Vec<u64> = parts
             .iter()
-            .scan(0u64, |next, (_, out)| {
+            .scan(0u64, |next, (_, _, out)| {
                 let at = *next;
                 *next += (out.len() as u64).div_ceil(16) * 16;
                 Some(at)
             })
             .collect();
-        let total = parts.last().map_or(0, |(_, out)| offsets[parts.len() - 1] + out.len() as u64);
+        let total = parts.last().map_or(0, |(_, _, out)| offsets[parts.len() - 1] + out.len() as u64);
         if total == 0 {
             return Ok(());
         }
         if self.staging.as_ref().is_none_or(|s| s.size < total) {
+            // exact the first time (a one-off read takes no more than it reads), then grown by
+            // powers of two: a rasterizer's windows of every size follow one another
+            let size = if self.staging.is_some() { total.next_power_of_two() } else { total };
             self.staging = None;
-            // grown by powers of two: windows of every size follow one another
-            self.staging = Some(Buffer::new(gpu, "readback staging", total.next_power_of_two(), MemoryKind::Readback)?);
+            self.staging = Some(Buffer::new(gpu, "readback staging", size, MemoryKind::Readback)?);
         }
         let staging = self.staging.as_ref().unwrap();
         let mut rec = super::Recorder::new(gpu)?;
-        for ((src, out), &at) in parts.iter().zip(&offsets) {
+        for ((src, offset, out), &at) in parts.iter().zip(&offsets) {
             if !out.is_empty() {
-                rec.copy_region(src, 0, staging, at, out.len() as u64);
+                rec.copy_region(src, *offset, staging, at, out.len() as u64);
             }
         }
         rec.submit_and_wait()?;
         gpu.shared.round_trips.readbacks.fetch_add(1, Ordering::Relaxed);
         let ptr = staging.mapped().ok_or_else(|| anyhow!("readback staging memory is not mapped"))?;
-        for ((_, out), &at) in parts.iter_mut().zip(&offsets) {
+        for ((_, _, out), &at) in parts.iter_mut().zip(&offsets) {
             unsafe { std::ptr::copy_nonoverlapping(ptr.add(at as usize), out.as_mut_ptr(), out.len()) };
         }
         Ok(())

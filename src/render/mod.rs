@@ -502,24 +502,23 @@ impl Rasterizer {
         let image = self.image.as_ref().unwrap();
         let (width, height, feature_dim) = (frame.params.width, frame.params.height, frame.params.feature_dim);
         let hw = (width * height) as usize;
-        let plane = |used: bool, n: usize| vec![0f32; if used { n } else { 0 }];
-        let (mut rgb, mut alpha, mut depth, mut expected_depth) =
-            (plane(true, 3 * hw), plane(true, hw), plane(true, hw), plane(true, hw));
-        let (mut median_depth, mut final_t) = (plane(frame.median_depth, hw), plane(true, hw));
-        let mut features = plane(feature_dim > 0, feature_dim as usize * hw);
+        let mut rgb = vec![0f32; 3 * hw];
+        let [mut alpha, mut depth, mut expected_depth, mut final_t] = [(); 4].map(|_| vec![0f32; hw]);
+        let mut median_depth = vec![0f32; if frame.median_depth { hw } else { 0 }];
+        let mut features = vec![0f32; feature_dim as usize * hw];
         let mut n_contrib = vec![0u32; hw];
-        let bytes = bytemuck::cast_slice_mut;
+        use bytemuck::cast_slice_mut as bytes;
         self.readback.read_into(
             &self.gpu,
             &mut [
-                (&image.rgb, bytes(&mut rgb)),
-                (&image.alpha, bytes(&mut alpha)),
-                (&image.depth, bytes(&mut depth)),
-                (&image.expected_depth, bytes(&mut expected_depth)),
-                (&image.median_depth, bytes(&mut median_depth)),
-                (&image.final_t, bytes(&mut final_t)),
-                (&image.n_contrib, bytemuck::cast_slice_mut(&mut n_contrib)),
-                (&image.features, bytes(&mut features)),
+                (&image.rgb, 0, bytes(&mut rgb)),
+                (&image.alpha, 0, bytes(&mut alpha)),
+                (&image.depth, 0, bytes(&mut depth)),
+                (&image.expected_depth, 0, bytes(&mut expected_depth)),
+                (&image.median_depth, 0, bytes(&mut median_depth)),
+                (&image.final_t, 0, bytes(&mut final_t)),
+                (&image.n_contrib, 0, bytes(&mut n_contrib)),
+                (&image.features, 0, bytes(&mut features)),
             ],
         )?;
         Ok(RenderOutput {
