@@ -7,7 +7,9 @@
 mod common;
 
 use cogeo::removal::hull::{leftovers_inside, remove_leftovers_inside, HullConfig};
-use cogeo::removal::select::{hole_masks, select_gaussians, splat_window, DepthPlanes, HoleConfig, MaskedView};
+use cogeo::removal::select::{
+    hole_masks, select_gaussians, splat_tiles, splat_window, DepthPlanes, HoleConfig, MaskedView,
+};
 use cogeo::render::reference::render_reference;
 use cogeo::scene::{logit, Camera, GaussianScene, SH_C0};
 
@@ -210,6 +212,22 @@ fn the_splat_window_holds_every_pixel_the_marked_gaussians_blend() {
         // a pixel of float32 margin each side, and the supports' boxes around their ellipses
         let (gw, gh) = (window.width() - tight.width(), window.height() - tight.height());
         assert!(gw <= 8 && gh <= 8, "{}: window {window:?} around {tight:?}", cam.name);
+        // its tiles that the marked Gaussians reach (`splat_tiles`) hold every such pixel too, and
+        // grown by 4 pixels every pixel within 4 of one
+        for grow in [0, 4] {
+            let window = window.grown(grow, grow, w, h);
+            let tiles = splat_tiles(&scene, &marked, cam, window, grow);
+            let tiles_x = window.width().div_ceil(16);
+            assert_eq!(tiles.len(), tiles_x * window.height().div_ceil(16));
+            let grown = cogeo::image_ops::dilate(&blended, w, h, grow as f32);
+            for p in (0..w * h).filter(|&p| grown[p]) {
+                let (x, y) = (p % w - window.x0, p / w - window.y0);
+                assert!(tiles[(y / 16) * tiles_x + x / 16], "{}: grown {grow}: ({x}, {y}) in the window", cam.name);
+            }
+        }
+        // and leave some of its tiles out: the point of rendering only them
+        let tiles = splat_tiles(&scene, &marked, cam, window, 0);
+        assert!(tiles.contains(&false), "{}: every tile of {window:?}", cam.name);
     }
     // none marked, none in view: no window
     assert!(splat_window(&scene, &vec![false; scene.len()], &cameras()[0]).is_none());

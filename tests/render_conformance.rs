@@ -238,3 +238,51 @@ fn a_scene_renders_the_bands_it_learnt_with_the_same_bits() {
     let dc = RenderSettings { sh_degree: Some(0), ..settings.clone() };
     assert_ne!(Rasterizer::new(&g).unwrap().render(&buffers, &cam, &dc).unwrap().rgb, full.rgb);
 }
+
+#[test]
+fn only_the_marked_tiles_are_blended_with_the_whole_renders_bits() {
+    // RenderSettings::only_tiles: a marked tile's pixels are the whole render's, bit for bit, in
+    // blend.comp's variants (one feature with the median depth) and in blend_features.comp (40
+    // channels); an unmarked tile is left empty (the background, alpha 0, no feature)
+    let g = gpu();
+    let scene = random_scene(131, 2, SceneMix::default());
+    let cam = test_camera(83, 37); // 6 x 3 tiles, the last column and row partial
+    let (tiles_x, tiles_y) = (83usize.div_ceil(16), 37usize.div_ceil(16));
+    let marked: Vec<bool> = (0..tiles_x * tiles_y).map(|t| (t * 7) % 3 != 0).collect();
+    let tile_of = |p: usize| (p / 83 / 16) * tiles_x + (p % 83) / 16;
+    let background = [0.2, 0.3, 0.4];
+    for channels in [1usize, 40] {
+        let features = random_features(137, scene.len(), channels);
+        let buffers = SceneBuffers::upload(&g, &scene, Some((&features, channels))).unwrap();
+        let mut raster = Rasterizer::new(&g).unwrap();
+        let settings = RenderSettings { background, features: true, median_depth: true, ..Default::default() };
+        let whole = raster.render(&buffers, &cam, &settings).unwrap();
+        let only = RenderSettings { only_tiles: Some(marked.clone()), ..settings.clone() };
+        let part = raster.render(&buffers, &cam, &only).unwrap();
+        let hw = 83 * 37;
+        let lit = (0..hw).filter(|&p| !marked[tile_of(p)] && whole.alpha[p] > 0.1).count();
+        assert!(lit > 100, "{channels} channels: the unmarked tiles show too little ({lit} pixels)");
+        for p in 0..hw {
+            let planes = |o: &RenderOutput| {
+                let mut v = vec![o.alpha[p], o.expected_depth[p], o.median_depth[p], o.final_t[p]];
+                v.extend((0..3).map(|c| o.rgb[c * hw + p]));
+                v.extend((0..channels).map(|c| o.features[c * hw + p]));
+                v
+            };
+            if marked[tile_of(p)] {
+                assert_eq!(planes(&part), planes(&whole), "{channels} channels, pixel {p}");
+            } else {
+                let rgb: Vec<f32> = (0..3).map(|c| part.rgb[c * hw + p]).collect();
+                assert_eq!((part.alpha[p], rgb), (0.0, background.to_vec()), "{channels} channels, pixel {p}");
+                assert!((0..channels).all(|c| part.features[c * hw + p] == 0.0), "{channels} channels, pixel {p}");
+            }
+        }
+        // the next render without a mask blends every tile again
+        assert_eq!(raster.render(&buffers, &cam, &settings).unwrap().rgb, whole.rgb);
+    }
+    // a mask for another image size is refused
+    let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
+    let wrong = RenderSettings { only_tiles: Some(vec![true; 4]), ..Default::default() };
+    let err = Rasterizer::new(&g).unwrap().render(&buffers, &cam, &wrong).unwrap_err();
+    assert!(err.to_string().contains("18"), "{err}");
+}

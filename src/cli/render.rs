@@ -181,6 +181,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         features: a.features,
         timestamps: a.timings,
         median_depth: false,
+        only_tiles: None,
     };
     let batch = cogeo::io::OutputBatch::begin();
     render_views(&gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings)?;

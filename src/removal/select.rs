@@ -17,7 +17,7 @@ use crate::image_ops::{bounding_box, dilate, including, Rect};
 use crate::removal::refine::window_camera;
 use crate::render::reach::{reaching, render_subset};
 use crate::render::reference::project;
-use crate::render::{RenderSettings, SceneRenderer};
+use crate::render::{RenderSettings, SceneRenderer, TILE};
 use crate::scene::{Camera, GaussianScene};
 use anyhow::{bail, Result};
 
@@ -106,7 +106,7 @@ impl<'s> ViewRenderer<'s> {
     }
 
     pub fn render(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
-        draw(&mut self.renderer, self.feature.is_some(), self.planes, camera, background)
+        draw(&mut self.renderer, self.feature.is_some(), self.planes, camera, background, None)
     }
 
     /// `render` of a small part of a view (`refine::window_camera`), on a CPU device from only the
@@ -117,12 +117,24 @@ impl<'s> ViewRenderer<'s> {
     /// sort the whole scene in less time than an upload through a staging buffer takes (not
     /// measured: no GPU was lent), so it renders the window from the whole scene.
     pub fn render_window(&mut self, camera: &Camera, background: [f32; 3]) -> Result<Rendered> {
+        self.render_window_tiles(camera, background, None)
+    }
+
+    /// `render_window` of only the marked tiles of the window (`RenderSettings::only_tiles`); the
+    /// others come out empty.
+    pub fn render_window_tiles(
+        &mut self,
+        camera: &Camera,
+        background: [f32; 3],
+        only_tiles: Option<Vec<bool>>,
+    ) -> Result<Rendered> {
+        let (features, planes) = (self.feature.is_some(), self.planes);
         if !self.gpu.info().is_cpu() {
-            return self.render(camera, background);
+            return draw(&mut self.renderer, features, planes, camera, background, only_tiles);
         }
         let keep = reaching(self.scene, camera, RenderSettings::default().near as f64);
         if !keep.contains(&true) {
-            return self.render(camera, background);
+            return draw(&mut self.renderer, features, planes, camera, background, only_tiles);
         }
         let part = render_subset(self.scene, &keep, self.learnt_sh_degree);
         let feature: Option<Vec<f32>> =
@@ -135,7 +147,7 @@ impl<'s> ViewRenderer<'s> {
             }
             none => none.insert(SceneRenderer::new(self.gpu, &part, feature)?),
         };
-        draw(renderer, self.feature.is_some(), self.planes, camera, background)
+        draw(renderer, features, planes, camera, background, only_tiles)
     }
 
     /// `render` of `window` of the view only (`refine::window_camera`: the whole view's pixels,
@@ -163,16 +175,17 @@ impl<'s> ViewRenderer<'s> {
 }
 
 /// One render through `renderer` with the marked Gaussians' weight (`features`) and the depth
-/// planes `planes`.
+/// planes `planes`, of the tiles `only_tiles` marks (`RenderSettings::only_tiles`) or all.
 fn draw(
     renderer: &mut SceneRenderer,
     features: bool,
     planes: DepthPlanes,
     camera: &Camera,
     background: [f32; 3],
+    only_tiles: Option<Vec<bool>>,
 ) -> Result<Rendered> {
     let median_depth = planes != DepthPlanes::Expected;
-    let settings = RenderSettings { background, features, median_depth, ..Default::default() };
+    let settings = RenderSettings { background, features, median_depth, only_tiles, ..Default::default() };
     let o = renderer.render(camera, &settings)?;
     let weight = if features { o.features } else { vec![0.0; o.alpha.len()] };
     let (depth, median) = match planes {
@@ -186,8 +199,21 @@ fn draw(
 impl Rendered {
     /// Puts `part`, a render of `window` of this `w` pixels wide view, in its place.
     pub fn paste(&mut self, window: Rect, part: &Rendered, w: usize) {
+        self.paste_where(window, part, w, |_| true)
+    }
+
+    /// `paste` of the part's pixels in the tiles `tiles` marks (row-major over the part's 16 x 16
+    /// pixel tiles, `RenderSettings::only_tiles`).
+    pub fn paste_tiles(&mut self, window: Rect, part: &Rendered, w: usize, tiles: &[bool]) {
+        let (pw, t) = (window.width(), TILE as usize);
+        let tiles_x = pw.div_ceil(t);
+        self.paste_where(window, part, w, |k| tiles[(k / pw / t) * tiles_x + (k % pw) / t])
+    }
+
+    /// `paste` of the part's pixels `k` for which `take(k)`.
+    fn paste_where(&mut self, window: Rect, part: &Rendered, w: usize, take: impl Fn(usize) -> bool) {
         let (n, pn) = (self.alpha.len(), part.alpha.len());
-        for k in 0..pn {
+        for k in (0..pn).filter(|&k| take(k)) {
             let p = window.pixel(k, w);
             for c in 0..3 {
                 self.rgb[c * n + p] = part.rgb[c * pn + k];
@@ -367,9 +393,11 @@ fn fill_and_footprint(
 /// Stage 2 again, for `selection` after the Gaussians `taken` (of `scene`; the selection `masked`
 /// was drawn for kept them) joined the removed ones, as the hull (`hull.rs`) does round after
 /// round: the views `hole_masks` draws for `selection`, rendered only where `taken` can blend
-/// (`splat_window`, grown by the hole's dilation), the rest kept from `masked`. Elsewhere neither
-/// render changes. (On the statue `images_2` each of the hull's three rounds drew every view
-/// again in 5.6 s; in windows of a quarter of the view, 2.1-2.7 s.)
+/// (the tiles `splat_tiles` marks in the window `splat_window` gives, grown by the hole's
+/// dilation), the rest kept from `masked`. Elsewhere neither render changes. (On the statue
+/// `images_2` each of the hull's three rounds drew every view again in 5.6 s; in windows of a
+/// quarter of the view, 2.1-2.7 s; the hull's six rounds, three under each rendered depth, took
+/// 10.5 s with whole windows and 8.5 s with their tiles, bench/JOURNAL.md, 2026-12-04, 18:00.)
 #[allow(clippy::too_many_arguments)]
 pub fn redraw_hole_masks(
     gpu: &Gpu,
@@ -387,8 +415,11 @@ pub fn redraw_hole_masks(
         let (w, h) = (cam.width as usize, cam.height as usize);
         if let Some(window) = splat_window(scene, taken, cam).map(|r| r.grown(grow, grow, w, h)) {
             let part_camera = window_camera(cam, window);
-            view.before.paste(window, &original.render_window(&part_camera, cfg.background)?, w);
-            view.after_removal.paste(window, &remaining.render_window(&part_camera, cfg.background)?, w);
+            let tiles = splat_tiles(scene, taken, cam, window, grow);
+            let before = original.render_window_tiles(&part_camera, cfg.background, Some(tiles.clone()))?;
+            view.before.paste_tiles(window, &before, w, &tiles);
+            let after = remaining.render_window_tiles(&part_camera, cfg.background, Some(tiles.clone()))?;
+            view.after_removal.paste_tiles(window, &after, w, &tiles);
             let before = &view.before;
             view.hole = hole_mask(&before.weight, &before.alpha, w, h, cfg.threshold, cfg.dilate);
             (view.fill, view.footprint) = fill_and_footprint(before, &view.after_removal, &view.hole, cfg, w, h);
@@ -399,23 +430,58 @@ pub fn redraw_hole_masks(
 }
 
 /// The pixels of `camera`'s view where the `marked` Gaussians of `scene` can blend: the box of
-/// their supports (`ProjectedGaussian::support`) and a pixel more for float32 rounding, or None.
+/// their supports (`splat_boxes`), or None.
 pub fn splat_window(scene: &GaussianScene, marked: &[bool], camera: &Camera) -> Option<Rect> {
+    let mut window: Option<Rect> = None;
+    for [x0, y0, x1, y1] in splat_boxes(scene, marked, camera) {
+        window = Some(including(Some(including(window, x0, y0)), x1, y1));
+    }
+    window
+}
+
+/// The tiles (16 x 16 pixels, row-major, `RenderSettings::only_tiles`) of `window` of `camera`'s
+/// view that the supports of the `marked` Gaussians of `scene` (`splat_boxes`), each grown by
+/// `grow` pixels, reach. In the hull's rounds on the statue `images_2` they were half of the
+/// pixels of the window that holds them all (the supports' own pixels a third).
+pub fn splat_tiles(scene: &GaussianScene, marked: &[bool], camera: &Camera, window: Rect, grow: usize) -> Vec<bool> {
+    let t = TILE as usize;
+    let tiles_x = window.width().div_ceil(t);
+    let mut tiles = vec![false; tiles_x * window.height().div_ceil(t)];
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    for [x0, y0, x1, y1] in splat_boxes(scene, marked, camera) {
+        let b = Rect { x0, y0, x1: x1 + 1, y1: y1 + 1 }.grown(grow, grow, w, h);
+        // in the window's pixels, clamped to it
+        let (x0, x1) = (b.x0.max(window.x0) - window.x0, b.x1.min(window.x1).saturating_sub(window.x0));
+        let (y0, y1) = (b.y0.max(window.y0) - window.y0, b.y1.min(window.y1).saturating_sub(window.y0));
+        if x0 >= x1 || y0 >= y1 {
+            continue;
+        }
+        for ty in y0 / t..=(y1 - 1) / t {
+            tiles[ty * tiles_x + x0 / t..=ty * tiles_x + (x1 - 1) / t].fill(true);
+        }
+    }
+    tiles
+}
+
+/// Per `marked` Gaussian of `scene` that can blend in `camera`'s view, the inclusive pixel box
+/// [x0, y0, x1, y1] where it can: its support (`ProjectedGaussian::support`) and a pixel more for
+/// float32 rounding, clamped to the view.
+fn splat_boxes<'a>(
+    scene: &'a GaussianScene,
+    marked: &'a [bool],
+    camera: &'a Camera,
+) -> impl Iterator<Item = [usize; 4]> + 'a {
     let near = RenderSettings::default().near as f64;
     let (w, h) = (camera.width as f64, camera.height as f64);
-    let mut window: Option<Rect> = None;
-    for i in (0..scene.len()).filter(|&i| marked[i]) {
-        let Some([x0, x1, y0, y1]) = project(scene, i, camera, near, 0).and_then(|g| g.support()) else { continue };
+    (0..scene.len()).filter(|&i| marked[i]).filter_map(move |i| {
+        let [x0, x1, y0, y1] = project(scene, i, camera, near, 0).and_then(|g| g.support())?;
         // pixel (px, py) is sampled at its centre (px + 0.5, py + 0.5)
         let (px0, px1) = ((x0 - 0.5).floor() - 1.0, (x1 - 0.5).ceil() + 1.0);
         let (py0, py1) = ((y0 - 0.5).floor() - 1.0, (y1 - 0.5).ceil() + 1.0);
         if px1 < 0.0 || py1 < 0.0 || px0 > w - 1.0 || py0 > h - 1.0 {
-            continue;
+            return None;
         }
-        // the corners' pixels, inclusive
         let (x0, y0) = (px0.max(0.0) as usize, py0.max(0.0) as usize);
-        let (x1, y1) = (px1.min(w - 1.0) as usize, py1.min(h - 1.0) as usize);
-        window = Some(including(Some(including(window, x0, y0)), x1, y1));
-    }
-    window
+        Some([x0, y0, px1.min(w - 1.0) as usize, py1.min(h - 1.0) as usize])
+    })
 }

@@ -10,17 +10,19 @@ mod moved;
 pub mod params;
 pub mod reach;
 pub mod reference;
+mod scene_buffers;
 mod scene_renderer;
 pub(crate) mod specialized;
 
 use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTiming, Readback, Recorder};
-use crate::scene::{Camera, GaussianScene, MAX_SH_DEGREE};
+use crate::scene::{Camera, MAX_SH_DEGREE};
 use crate::shaders;
 use crate::sort::{self, scan, RadixSort};
 use anyhow::{bail, Result};
 pub use blend_layout::BlendLayout;
 use features::FeaturePipelines;
 use params::{EmitPush, ParamsPush, ParamsPushU32, RenderParams};
+pub use scene_buffers::SceneBuffers;
 pub use scene_renderer::{render_rgb, SceneRenderer};
 use specialized::SpecializedPipelines;
 
@@ -28,101 +30,6 @@ pub const TILE: u32 = 16;
 
 /// Consecutive intersections per invocation of tile_ranges.comp.
 const TILE_RANGE_RUN: u32 = 8;
-
-/// A scene's attributes on the GPU (structure of arrays, one buffer per attribute).
-pub struct SceneBuffers {
-    pub means: Buffer,
-    pub log_scales: Buffer,
-    pub quats: Buffer,
-    pub opacity_logits: Buffer,
-    pub sh: Buffer,
-    /// N x D row-major identity features, when present.
-    pub features: Option<Buffer>,
-    pub num_gaussians: u32,
-    pub sh_degree: u32,
-    pub feature_dim: u32,
-}
-
-impl SceneBuffers {
-    /// Uploads a scene; `features` is an N x D row-major matrix.
-    pub fn upload(gpu: &Gpu, scene: &GaussianScene, features: Option<(&[f32], usize)>) -> Result<SceneBuffers> {
-        let n = scene.len();
-        let bytes = n as u64 * (3 + 3 + 4 + 1 + 3 * scene.sh_coeffs() as u64) * 4;
-        let with_context = |r: Result<Buffer>| {
-            r.map_err(|e| {
-                e.context(format!(
-                    "cannot upload a scene of {n} Gaussians (SH degree {}, {} MiB of attributes) to {}",
-                    scene.sh_degree,
-                    bytes >> 20,
-                    gpu.info().name
-                ))
-            })
-        };
-        let features = match features {
-            Some((f, d)) => {
-                assert_eq!(f.len(), n * d, "feature matrix must be N x D");
-                Some((with_context(Buffer::from_slice(gpu, "features", f))?, d as u32))
-            }
-            None => None,
-        };
-        Ok(SceneBuffers {
-            means: with_context(Buffer::from_slice(gpu, "means", &scene.means))?,
-            log_scales: with_context(Buffer::from_slice(gpu, "log_scales", &scene.log_scales))?,
-            quats: with_context(Buffer::from_slice(gpu, "quats", &scene.quats))?,
-            opacity_logits: with_context(Buffer::from_slice(gpu, "opacity_logits", &scene.opacity_logits))?,
-            sh: with_context(Buffer::from_slice(gpu, "sh", &scene.sh))?,
-            num_gaussians: n as u32,
-            sh_degree: scene.sh_degree,
-            feature_dim: features.as_ref().map(|f| f.1).unwrap_or(0),
-            features: features.map(|f| f.0),
-        })
-    }
-
-    /// The trainable parameter tensors in a fixed order (means, log-scales, rotations, opacity
-    /// logits, SH), each with its number of floats.
-    pub fn parameters(&self) -> [(&Buffer, u32); 5] {
-        let n = self.num_gaussians;
-        let k = crate::scene::sh_coeffs(self.sh_degree) as u32;
-        [
-            (&self.means, 3 * n),
-            (&self.log_scales, 3 * n),
-            (&self.quats, 4 * n),
-            (&self.opacity_logits, n),
-            (&self.sh, 3 * k * n),
-        ]
-    }
-
-    /// Puts `scene` (and `features`, N x D) in these buffers in place of the scene they hold: each
-    /// attribute into its buffer where it fits, else into a new one half again as large, so that a
-    /// run of parts of one scene (`SceneRenderer::upload`) soon stops allocating.
-    pub fn reload(&mut self, gpu: &Gpu, scene: &GaussianScene, features: Option<(&[f32], usize)>) -> Result<()> {
-        fn fill<T: bytemuck::Pod>(gpu: &Gpu, buffer: &mut Buffer, name: &str, data: &[T]) -> Result<()> {
-            let bytes = std::mem::size_of_val(data) as u64;
-            if bytes > buffer.size() {
-                *buffer = Buffer::new(gpu, name, bytes + bytes / 2, MemoryKind::Device)?;
-            }
-            buffer.upload(gpu, data)
-        }
-        let n = scene.len();
-        fill(gpu, &mut self.means, "means", &scene.means)?;
-        fill(gpu, &mut self.log_scales, "log_scales", &scene.log_scales)?;
-        fill(gpu, &mut self.quats, "quats", &scene.quats)?;
-        fill(gpu, &mut self.opacity_logits, "opacity_logits", &scene.opacity_logits)?;
-        fill(gpu, &mut self.sh, "sh", &scene.sh)?;
-        if let Some((f, d)) = features {
-            assert_eq!(f.len(), n * d, "feature matrix must be N x D");
-        }
-        match (features, &mut self.features) {
-            (Some((f, _)), Some(buffer)) => fill(gpu, buffer, "features", f)?,
-            (Some((f, _)), none) => *none = Some(Buffer::from_slice(gpu, "features", f)?),
-            (None, features) => *features = None,
-        }
-        self.num_gaussians = n as u32;
-        self.sh_degree = scene.sh_degree;
-        self.feature_dim = features.map_or(0, |f| f.1 as u32);
-        Ok(())
-    }
-}
 
 /// Per-render options.
 #[derive(Clone, Debug)]
@@ -138,6 +45,10 @@ pub struct RenderSettings {
     pub timestamps: bool,
     /// Also the median depth (`RenderOutput::median_depth`; empty without it).
     pub median_depth: bool,
+    /// Composite only the tiles marked here (row-major over the image's 16 x 16 pixel tiles); the
+    /// others come out empty (the background, alpha 0). For a forward render of which the caller
+    /// reads a part: a tile's pixels are those of the whole render, bit for bit.
+    pub only_tiles: Option<Vec<bool>>,
 }
 
 impl Default for RenderSettings {
@@ -149,6 +60,7 @@ impl Default for RenderSettings {
             features: false,
             timestamps: false,
             median_depth: false,
+            only_tiles: None,
         }
     }
 }
@@ -232,6 +144,8 @@ struct ImageBuffers {
     final_t: Buffer,
     n_contrib: Buffer,
     features: Buffer,
+    /// `RenderSettings::only_tiles`, one u32 per tile.
+    tile_mask: Buffer,
 }
 
 /// Owner of the forward-pass pipelines and their working memory.
@@ -364,6 +278,7 @@ impl Rasterizer {
             final_t: buf("out_final_t", hw)?,
             n_contrib: buf("out_n_contrib", hw)?,
             features: buf("out_features", feature_dim.max(1) as u64 * hw)?,
+            tile_mask: Buffer::new(g, "tile_mask", tiles * 4, MemoryKind::Upload)?,
         });
         Ok(())
     }
@@ -413,6 +328,15 @@ impl Rasterizer {
         let num_tiles = tiles_x * tiles_y;
 
         let mut params = self.frame_params(scene, camera, settings, feature_dim, tiles_x, tiles_y);
+        if let Some(tiles) = &settings.only_tiles {
+            if tiles.len() != num_tiles as usize {
+                bail!("only_tiles marks {} tiles, the {width}x{height} image has {num_tiles}", tiles.len());
+            }
+            let mask: Vec<u32> = tiles.iter().map(|&t| t as u32).collect();
+            let image = self.image.as_ref().unwrap();
+            image.tile_mask.upload(&self.gpu, &mask)?;
+            (params.tile_mask, params.only_tiles) = (image.tile_mask.address(), 1);
+        }
         let degree = params.sh_degree;
         if degree > MAX_SH_DEGREE {
             bail!("cannot render SH degree {degree}: the shaders implement degrees 0..={MAX_SH_DEGREE}");
@@ -629,6 +553,10 @@ impl Rasterizer {
             tiles_x,
             tiles_y,
             feature_dim,
+            // every tile unless `forward_open` marks some (`RenderSettings::only_tiles`)
+            tile_mask: 0,
+            only_tiles: 0,
+            pad1: 0,
         }
     }
 }

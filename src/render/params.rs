@@ -1,5 +1,5 @@
 //! The per-frame parameter block of the render passes; mirrors `shaders/glsl/common/render_params.glsl`
-//! field for field (std430: pointers first, then 4-byte scalars, then the one pointer added since).
+//! field for field (std430: pointers first, then 4-byte scalars, then the fields added since).
 
 use bytemuck::{Pod, Zeroable};
 
@@ -50,8 +50,13 @@ pub struct RenderParams {
     pub tiles_x: u32,
     pub tiles_y: u32,
     pub feature_dim: u32,
-    /// Written only by blend.comp's MEDIAN_DEPTH variant; last, as in the shader.
+    /// Written only by blend.comp's MEDIAN_DEPTH variant; after the scalars, as in the shader.
     pub out_median_depth: u64,
+    /// One u32 per tile, read where `only_tiles` is nonzero: the tiles the blends composite
+    /// (`RenderSettings::only_tiles`).
+    pub tile_mask: u64,
+    pub only_tiles: u32,
+    pub pad1: u32,
 }
 
 /// Push constants of most render passes: just the address of the parameter block.

@@ -45,7 +45,18 @@ layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Ren
     uint tiles_y;
     uint feature_dim;
     Floats out_median_depth; // depth where the transmittance falls to one half (blend.comp, MEDIAN_DEPTH)
+    // with only_tiles != 0, the blends composite only the tiles whose entry here is nonzero and
+    // leave the others empty (background, alpha 0): a render of which the caller reads a part
+    Uints tile_mask;       // tiles
+    uint only_tiles;
+    uint pad1;
 };
+
+// The range of intersections the blends composite for `tile`: empty for a tile the mask leaves out.
+uvec2 blended_range(RenderParams p, uint tile) {
+    uvec2 range = UVec2View(p.tile_ranges).v[tile];
+    return p.only_tiles != 0 && p.tile_mask.v[tile] == 0 ? uvec2(range.x) : range;
+}
 
 const uint TILE = 16;
 const float ALPHA_MIN = 1.0 / 255.0;

@@ -30,7 +30,7 @@ void main() {
     if (tile >= p.tiles_x * p.tiles_y) return;  // uniform over the workgroup
     uint tx = tile % p.tiles_x, ty = tile / p.tiles_x;
 
-    uvec2 range = UVec2View(p.tile_ranges).v[tile];
+    uvec2 range = blended_range(p, tile);
     uint start = range.x, end = range.y;
     vec2 pixel[ROWS];
     float T[ROWS], D[ROWS], W[ROWS], F[ROWS], M[ROWS];
