@@ -15,7 +15,7 @@
 use crate::gpu::Gpu;
 use crate::image_ops::{bounding_box, dilate, including, Rect};
 use crate::removal::refine::window_camera;
-use crate::render::reach::{reaching, render_subset};
+use crate::render::reach::{reaching, reaching_tiles, render_subset};
 use crate::render::reference::project;
 use crate::render::{RenderSettings, SceneRenderer, TILE};
 use crate::scene::{Camera, GaussianScene};
@@ -132,7 +132,11 @@ impl<'s> ViewRenderer<'s> {
         if !self.gpu.info().is_cpu() {
             return draw(&mut self.renderer, features, planes, camera, background, only_tiles);
         }
-        let keep = reaching(self.scene, camera, RenderSettings::default().near as f64);
+        let near = RenderSettings::default().near as f64;
+        let keep = match &only_tiles {
+            Some(tiles) => reaching_tiles(self.scene, camera, near, tiles),
+            None => reaching(self.scene, camera, near),
+        };
         if !keep.contains(&true) {
             return draw(&mut self.renderer, features, planes, camera, background, only_tiles);
         }

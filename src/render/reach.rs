@@ -1,7 +1,8 @@
 //! Which Gaussians a render of a camera can bin, as supersets: a cheap one (`may_reach`), so that
 //! a render of a small window (the removal's hull redraws each view's hole in one,
 //! `removal::select`) projects and sorts only the Gaussians that can reach it, not the whole
-//! scene; and a tight one (`reaches`), for the Gaussians a refinement over windows leaves out
+//! scene, and a render of some of its tiles only those that can reach them (`reaching_tiles`);
+//! and a tight one (`reaches`), for the Gaussians a refinement over windows leaves out
 //! (`removal::refine::seen_by_any`).
 //!
 //! The bound follows project.comp: a Gaussian is binned only where its ellipse, at the binning
@@ -22,11 +23,17 @@ const Q_MAX: f64 = 12.0;
 /// Whether Gaussian `i` of `scene` can be binned into any pixel of `camera`'s image, its view
 /// depth culled at `near` (a superset: 1 % and two pixels wider than the bound for float32).
 pub fn may_reach(scene: &GaussianScene, i: usize, camera: &Camera, near: f64) -> bool {
+    reach_box(scene, i, camera, near).is_some_and(|(center, half)| box_meets_image(center, half, camera))
+}
+
+/// `may_reach`'s bound of Gaussian `i`: the centre and half extents of the image box it can be
+/// binned in, or None in front of the near plane.
+fn reach_box(scene: &GaussianScene, i: usize, camera: &Camera, near: f64) -> Option<([f64; 2], [f64; 2])> {
     let m = scene.means[i];
     let [x, y, z] = camera.to_camera([m[0] as f64, m[1] as f64, m[2] as f64]);
     // float32's view depth may pass the near plane where float64's does not
     if z <= near - 1e-6 * (1.0 + near.abs() + z.abs()) {
-        return false;
+        return None;
     }
     let largest = scene.log_scales[i].iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b)) as f64;
     let variance = (2.0 * largest).exp();
@@ -37,7 +44,7 @@ pub fn may_reach(scene: &GaussianScene, i: usize, camera: &Camera, near: f64) ->
         (Q_MAX * (row * variance + 0.3)).sqrt() * 1.01 + 2.0
     };
     let (rx, ry) = (half(camera.fx, u), half(camera.fy, v));
-    box_meets_image([camera.fx * u + camera.cx, camera.fy * v + camera.cy], [rx, ry], camera)
+    Some(([camera.fx * u + camera.cx, camera.fy * v + camera.cy], [rx, ry]))
 }
 
 /// Whether the box of half-extents `half` around image point `center` meets `camera`'s image. NaN
@@ -72,6 +79,36 @@ pub fn reaches(scene: &GaussianScene, i: usize, camera: &Camera, near: f64) -> b
 /// the statue `images_2`.)
 pub fn reaching(scene: &GaussianScene, camera: &Camera, near: f64) -> Vec<bool> {
     (0..scene.len()).map(|i| may_reach(scene, i, camera, near)).collect()
+}
+
+/// `reaching` for a render of only the tiles `tiles` marks (`RenderSettings::only_tiles`, 16 x 16
+/// pixels row-major over `camera`'s image): the Gaussians whose `may_reach` box meets a marked
+/// tile. The others bin into no pixel of those tiles, so the marked tiles render the same bits
+/// without them.
+pub fn reaching_tiles(scene: &GaussianScene, camera: &Camera, near: f64, tiles: &[bool]) -> Vec<bool> {
+    let t = crate::render::TILE as f64;
+    let tiles_x = (camera.width as usize).div_ceil(t as usize);
+    let tiles_y = tiles.len() / tiles_x.max(1);
+    (0..scene.len())
+        .map(|i| {
+            let Some(([x, y], [rx, ry])) = reach_box(scene, i, camera, near) else { return false };
+            if !box_meets_image([x, y], [rx, ry], camera) {
+                return false;
+            }
+            // NaN (a degenerate Gaussian) keeps it: the renderer decides
+            if !(x - rx).is_finite() || !(x + rx).is_finite() || !(y - ry).is_finite() || !(y + ry).is_finite() {
+                return true;
+            }
+            // the tiles the box meets, a tile's pixels [16 t, 16 t + 16) and a pixel more each way
+            let span = |lo: f64, hi: f64, n: usize| {
+                let first = ((lo - 1.0) / t).floor().max(0.0) as usize;
+                let last = (((hi + 1.0) / t).floor().max(0.0) as usize).min(n - 1);
+                first..=last
+            };
+            let (xs, ys) = (span(x - rx, x + rx, tiles_x), span(y - ry, y + ry, tiles_y));
+            ys.into_iter().any(|ty| xs.clone().any(|tx| tiles[ty * tiles_x + tx]))
+        })
+        .collect()
 }
 
 /// The Gaussians `keep` marks, with only what a render reads (positions, scales, rotations,
@@ -135,5 +172,42 @@ mod tests {
             assert!(kept - met < far / 2, "may_reach kept {kept}, of which {met} meet the image and {far} do not");
             assert!(tight - met < far / 100, "reaches kept {tight}, of which {met} meet the image and {far} do not");
         }
+    }
+
+    /// `reaching_tiles` keeps every Gaussian whose support meets a pixel of a marked tile, only
+    /// Gaussians `reaching` keeps, and fewer than it where tiles are left out.
+    #[test]
+    fn keeps_every_gaussian_whose_support_meets_a_marked_tile() {
+        let mut rng = Rng::new(11);
+        let mut scene = GaussianScene::default();
+        for _ in 0..20000 {
+            let mean = [rng.range(-6.0, 6.0) as f32, rng.range(-5.0, 5.0) as f32, rng.range(-1.0, 9.0) as f32];
+            let log_scales = [0; 3].map(|_| rng.range(-5.0, -1.0) as f32);
+            let quat = [0; 4].map(|_| rng.normal() as f32);
+            scene.push(mean, log_scales, quat, rng.range(-4.0, 6.0) as f32, &[0.1, 0.2, 0.3]);
+        }
+        let cam = Camera::look_at("v", 150, 100, 70.0, [0.0, 0.0, -3.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]);
+        let (tiles_x, tiles_y) = (150usize.div_ceil(16), 100usize.div_ceil(16));
+        let tiles: Vec<bool> = (0..tiles_x * tiles_y).map(|t| (t * 5) % 7 < 3).collect();
+        let (all, some) = (reaching(&scene, &cam, 0.01), reaching_tiles(&scene, &cam, 0.01, &tiles));
+        let mut met = 0;
+        for i in 0..scene.len() {
+            assert!(all[i] || !some[i], "Gaussian {i}: kept for the tiles, not for the image");
+            let Some([x0, x1, y0, y1]) = project(&scene, i, &cam, 0.01, 0).and_then(|g| g.support()) else { continue };
+            // the pixels whose centres (px + 0.5, py + 0.5) the support holds
+            let (px0, px1) = ((x0 - 0.5).ceil().max(0.0), (x1 - 0.5).floor().min(149.0));
+            let (py0, py1) = ((y0 - 0.5).ceil().max(0.0), (y1 - 0.5).floor().min(99.0));
+            if px0 > px1 || py0 > py1 {
+                continue;
+            }
+            let (tx, ty) = ((px0 as usize / 16)..=(px1 as usize / 16), (py0 as usize / 16)..=(py1 as usize / 16));
+            if ty.into_iter().any(|y| tx.clone().any(|x| tiles[y * tiles_x + x])) {
+                met += 1;
+                assert!(some[i], "Gaussian {i} blends in a marked tile but was left out");
+            }
+        }
+        let (kept_all, kept_some) = (all.iter().filter(|&&k| k).count(), some.iter().filter(|&&k| k).count());
+        assert!(met > 100, "{met} Gaussians meet a marked tile: the test needs more");
+        assert!(kept_some < kept_all * 9 / 10, "{kept_some} of {kept_all} kept for under half of the tiles");
     }
 }
