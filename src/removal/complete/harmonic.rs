@@ -78,7 +78,7 @@ fn neighbours(i: usize, w: usize, h: usize) -> impl Iterator<Item = usize> {
 
 impl Level {
     fn new(unknown: &[bool], w: usize, h: usize) -> Level {
-        let red = |i: usize| (i % w + i / w) % 2 == 0;
+        let red = |i: usize| (i % w + i / w).is_multiple_of(2);
         let stencils = (0..w * h)
             .filter(|&i| unknown[i] && red(i))
             .chain((0..w * h).filter(|&i| unknown[i] && !red(i)))
