@@ -136,20 +136,27 @@ mod tests {
     use crate::render::reference::project;
     use crate::rng::Rng;
 
+    /// 20000 random Gaussians, their centres within `x` and `y` (and depth -1 to 9), their log
+    /// scales within `log_scales`, in front of and behind the tests' camera at z = -3.
+    fn random_scene(seed: u64, x: f64, y: f64, log_scales: (f64, f64)) -> GaussianScene {
+        let mut rng = Rng::new(seed);
+        let mut scene = GaussianScene::default();
+        for _ in 0..20000 {
+            let mean = [rng.range(-x, x) as f32, rng.range(-y, y) as f32, rng.range(-1.0, 9.0) as f32];
+            let scales = [0; 3].map(|_| rng.range(log_scales.0, log_scales.1) as f32);
+            let quat = [0; 4].map(|_| rng.normal() as f32);
+            scene.push(mean, scales, quat, rng.range(-4.0, 6.0) as f32, &[0.1, 0.2, 0.3]);
+        }
+        scene
+    }
+
     /// Every Gaussian whose support (the reference projection's pixel box at its opacity) meets
     /// the image is kept by both bounds, over random Gaussians in and around the view of a camera
     /// and of a small window of it; `reaches` keeps a subset of what `may_reach` keeps; and most
     /// of those that do not meet it are left out, by `reaches` all but a few.
     #[test]
     fn keeps_every_gaussian_whose_support_meets_the_image() {
-        let mut rng = Rng::new(7);
-        let mut scene = GaussianScene::default();
-        for _ in 0..20000 {
-            let mean = [rng.range(-20.0, 20.0) as f32, rng.range(-15.0, 15.0) as f32, rng.range(-1.0, 9.0) as f32];
-            let log_scales = [0; 3].map(|_| rng.range(-5.0, -0.5) as f32);
-            let quat = [0; 4].map(|_| rng.normal() as f32);
-            scene.push(mean, log_scales, quat, rng.range(-4.0, 6.0) as f32, &[0.1, 0.2, 0.3]);
-        }
+        let scene = random_scene(7, 20.0, 15.0, (-5.0, -0.5));
         let camera = Camera::look_at("v", 160, 120, 70.0, [0.0, 0.0, -3.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]);
         let window = Rect { x0: 70, y0: 50, x1: 100, y1: 70 };
         for cam in [camera.clone(), crate::removal::refine::window_camera(&camera, window)] {
@@ -178,14 +185,7 @@ mod tests {
     /// Gaussians `reaching` keeps, and fewer than it where tiles are left out.
     #[test]
     fn keeps_every_gaussian_whose_support_meets_a_marked_tile() {
-        let mut rng = Rng::new(11);
-        let mut scene = GaussianScene::default();
-        for _ in 0..20000 {
-            let mean = [rng.range(-6.0, 6.0) as f32, rng.range(-5.0, 5.0) as f32, rng.range(-1.0, 9.0) as f32];
-            let log_scales = [0; 3].map(|_| rng.range(-5.0, -1.0) as f32);
-            let quat = [0; 4].map(|_| rng.normal() as f32);
-            scene.push(mean, log_scales, quat, rng.range(-4.0, 6.0) as f32, &[0.1, 0.2, 0.3]);
-        }
+        let scene = random_scene(11, 6.0, 5.0, (-5.0, -1.0));
         let cam = Camera::look_at("v", 150, 100, 70.0, [0.0, 0.0, -3.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]);
         let (tiles_x, tiles_y) = (150usize.div_ceil(16), 100usize.div_ceil(16));
         let tiles: Vec<bool> = (0..tiles_x * tiles_y).map(|t| (t * 5) % 7 < 3).collect();
