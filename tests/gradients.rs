@@ -395,3 +395,29 @@ fn feature_backward_layouts_agree() {
         }
     }
 }
+
+#[test]
+fn a_render_of_only_some_tiles_has_no_backward() {
+    // RenderSettings::only_tiles leaves the other tiles' per-pixel state unblended: the backward,
+    // which replays every tile, refuses such a frame
+    let (g, sc, cam) = (gpu(), scene(5, 40, 0), camera());
+    let buffers = SceneBuffers::upload(&g, &sc, None).unwrap();
+    let mut raster = Rasterizer::new(&g).unwrap();
+    let tiles = (cam.width.div_ceil(16) * cam.height.div_ceil(16)) as usize;
+    let settings = RenderSettings { only_tiles: Some(vec![true; tiles]), ..Default::default() };
+    let frame = raster.forward(&buffers, &cam, &settings).unwrap();
+    let w = color_weights((cam.width * cam.height) as usize, 3);
+    let rgb = Buffer::from_slice(&g, "upstream", &w.rgb).unwrap();
+    let upstream = PixelGradients { rgb: &rgb, alpha: None, depth: None, expected_depth: None, features: None };
+    let grads = SceneGradients::new(&g, &buffers).unwrap();
+    let mut rec = Recorder::new(&g).unwrap();
+    let err = Backward::new(&g, false).unwrap().record(
+        &mut rec,
+        raster.params_buffer(),
+        &frame.params,
+        &upstream,
+        &grads,
+        false,
+    );
+    assert!(err.unwrap_err().to_string().contains("only_tiles"));
+}

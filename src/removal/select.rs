@@ -401,7 +401,7 @@ fn fill_and_footprint(
 /// dilation), the rest kept from `masked`. Elsewhere neither render changes. (On the statue
 /// `images_2` each of the hull's three rounds drew every view again in 5.6 s; in windows of a
 /// quarter of the view, 2.1-2.7 s; the hull's six rounds, three under each rendered depth, took
-/// 10.5 s with whole windows and 8.5 s with their tiles, bench/JOURNAL.md, 2026-12-04, 18:00.)
+/// 10.5 s with whole windows and 8.5 s with their tiles, bench/JOURNAL.md, 2026-12-04, 17:43.)
 #[allow(clippy::too_many_arguments)]
 pub fn redraw_hole_masks(
     gpu: &Gpu,

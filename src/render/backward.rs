@@ -251,6 +251,10 @@ impl Backward {
         features_only: bool,
         project: bool,
     ) -> Result<()> {
+        if frame.only_tiles != 0 {
+            // the blend backward walks every tile's list from the forward's state
+            anyhow::bail!("a render of only some tiles (RenderSettings::only_tiles) has no backward pass");
+        }
         self.reserve(frame.num_gaussians)?;
         if upstream.features.is_some() {
             self.features.prepare(&self.gpu, frame.feature_dim)?;
