@@ -215,8 +215,9 @@ fn the_splat_window_holds_every_pixel_the_marked_gaussians_blend() {
         // its tiles that the marked Gaussians reach (`splat_tiles`) hold every such pixel too, and
         // grown by 4 pixels every pixel within 4 of one
         for grow in [0, 4] {
+            let (tiled, tiles) = splat_tiles(&scene, &marked, cam, grow).expect("a window");
             let window = window.grown(grow, grow, w, h);
-            let tiles = splat_tiles(&scene, &marked, cam, window, grow);
+            assert_eq!(tiled, window, "{}: grown {grow}", cam.name);
             let tiles_x = window.width().div_ceil(16);
             assert_eq!(tiles.len(), tiles_x * window.height().div_ceil(16));
             let grown = cogeo::image_ops::dilate(&blended, w, h, grow as f32);
@@ -226,9 +227,11 @@ fn the_splat_window_holds_every_pixel_the_marked_gaussians_blend() {
             }
         }
         // and leave some of its tiles out: the point of rendering only them
-        let tiles = splat_tiles(&scene, &marked, cam, window, 0);
+        let (_, tiles) = splat_tiles(&scene, &marked, cam, 0).expect("a window");
         assert!(tiles.contains(&false), "{}: every tile of {window:?}", cam.name);
     }
     // none marked, none in view: no window
-    assert!(splat_window(&scene, &vec![false; scene.len()], &cameras()[0]).is_none());
+    let none = vec![false; scene.len()];
+    assert!(splat_window(&scene, &none, &cameras()[0]).is_none());
+    assert!(splat_tiles(&scene, &none, &cameras()[0], 4).is_none());
 }

@@ -417,9 +417,8 @@ pub fn redraw_hole_masks(
     let grow = cfg.dilate.max(0.0).ceil() as usize + 1;
     for (i, (cam, view)) in cameras.iter().zip(masked.iter_mut()).enumerate() {
         let (w, h) = (cam.width as usize, cam.height as usize);
-        if let Some(window) = splat_window(scene, taken, cam).map(|r| r.grown(grow, grow, w, h)) {
+        if let Some((window, tiles)) = splat_tiles(scene, taken, cam, grow) {
             let part_camera = window_camera(cam, window);
-            let tiles = splat_tiles(scene, taken, cam, window, grow);
             let before = original.render_window_tiles(&part_camera, cfg.background, Some(tiles.clone()))?;
             view.before.paste_tiles(window, &before, w, &tiles);
             let after = remaining.render_window_tiles(&part_camera, cfg.background, Some(tiles.clone()))?;
@@ -436,45 +435,43 @@ pub fn redraw_hole_masks(
 /// The pixels of `camera`'s view where the `marked` Gaussians of `scene` can blend: the box of
 /// their supports (`splat_boxes`), or None.
 pub fn splat_window(scene: &GaussianScene, marked: &[bool], camera: &Camera) -> Option<Rect> {
-    let mut window: Option<Rect> = None;
-    for [x0, y0, x1, y1] in splat_boxes(scene, marked, camera) {
-        window = Some(including(Some(including(window, x0, y0)), x1, y1));
-    }
-    window
+    bounding(splat_boxes(scene, marked, camera))
 }
 
-/// The tiles (16 x 16 pixels, row-major, `RenderSettings::only_tiles`) of `window` of `camera`'s
-/// view that the supports of the `marked` Gaussians of `scene` (`splat_boxes`), each grown by
-/// `grow` pixels, reach. In the hull's rounds on the statue `images_2` they were half of the
-/// pixels of the window that holds them all (the supports' own pixels a third).
-pub fn splat_tiles(scene: &GaussianScene, marked: &[bool], camera: &Camera, window: Rect, grow: usize) -> Vec<bool> {
+/// `splat_window` grown by `grow` pixels, and the tiles of it (16 x 16 pixels, row-major,
+/// `RenderSettings::only_tiles`) that the supports of the `marked` Gaussians, each grown by
+/// `grow` pixels too, reach; None where none can blend. In the hull's rounds on the statue
+/// `images_2` the tiles were half of the window's pixels (the supports' own pixels a third).
+pub fn splat_tiles(scene: &GaussianScene, marked: &[bool], camera: &Camera, grow: usize) -> Option<(Rect, Vec<bool>)> {
+    let (w, h) = (camera.width as usize, camera.height as usize);
+    let boxes: Vec<Rect> = splat_boxes(scene, marked, camera).map(|b| b.grown(grow, grow, w, h)).collect();
+    // (growing each box and then taking their bounds is growing the bounds: the window holds them)
+    let window = bounding(boxes.iter().copied())?;
     let t = TILE as usize;
     let tiles_x = window.width().div_ceil(t);
     let mut tiles = vec![false; tiles_x * window.height().div_ceil(t)];
-    let (w, h) = (camera.width as usize, camera.height as usize);
-    for [x0, y0, x1, y1] in splat_boxes(scene, marked, camera) {
-        let b = Rect { x0, y0, x1: x1 + 1, y1: y1 + 1 }.grown(grow, grow, w, h);
-        // in the window's pixels, clamped to it
-        let (x0, x1) = (b.x0.max(window.x0) - window.x0, b.x1.min(window.x1).saturating_sub(window.x0));
-        let (y0, y1) = (b.y0.max(window.y0) - window.y0, b.y1.min(window.y1).saturating_sub(window.y0));
-        if x0 >= x1 || y0 >= y1 {
-            continue;
-        }
+    for b in boxes {
+        let (x0, x1, y0, y1) = (b.x0 - window.x0, b.x1 - window.x0, b.y0 - window.y0, b.y1 - window.y0);
         for ty in y0 / t..=(y1 - 1) / t {
             tiles[ty * tiles_x + x0 / t..=ty * tiles_x + (x1 - 1) / t].fill(true);
         }
     }
-    tiles
+    Some((window, tiles))
 }
 
-/// Per `marked` Gaussian of `scene` that can blend in `camera`'s view, the inclusive pixel box
-/// [x0, y0, x1, y1] where it can: its support (`ProjectedGaussian::support`) and a pixel more for
-/// float32 rounding, clamped to the view.
+/// The bounding rectangle of `boxes` (each taken in by its corner pixels), or None for none.
+fn bounding(boxes: impl Iterator<Item = Rect>) -> Option<Rect> {
+    boxes.fold(None, |r, b| Some(including(Some(including(r, b.x0, b.y0)), b.x1 - 1, b.y1 - 1)))
+}
+
+/// Per `marked` Gaussian of `scene` that can blend in `camera`'s view, the pixels where it can:
+/// its support (`ProjectedGaussian::support`) and a pixel more for float32 rounding, clamped to
+/// the view.
 fn splat_boxes<'a>(
     scene: &'a GaussianScene,
     marked: &'a [bool],
     camera: &'a Camera,
-) -> impl Iterator<Item = [usize; 4]> + 'a {
+) -> impl Iterator<Item = Rect> + 'a {
     let near = RenderSettings::default().near as f64;
     let (w, h) = (camera.width as f64, camera.height as f64);
     (0..scene.len()).filter(|&i| marked[i]).filter_map(move |i| {
@@ -485,7 +482,8 @@ fn splat_boxes<'a>(
         if px1 < 0.0 || py1 < 0.0 || px0 > w - 1.0 || py0 > h - 1.0 {
             return None;
         }
-        let (x0, y0) = (px0.max(0.0) as usize, py0.max(0.0) as usize);
-        Some([x0, y0, px1.min(w - 1.0) as usize, py1.min(h - 1.0) as usize])
+        // the corners' pixels, inclusive
+        let (x1, y1) = (px1.min(w - 1.0) as usize, py1.min(h - 1.0) as usize);
+        Some(Rect { x0: px0.max(0.0) as usize, y0: py0.max(0.0) as usize, x1: x1 + 1, y1: y1 + 1 })
     })
 }
