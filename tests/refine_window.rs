@@ -1,13 +1,14 @@
 //! The refinement's window (removal/refine.rs): a view refined over part of its image must see
 //! those pixels exactly as the whole view does, and the window must hold the view's hole and
 //! every patch Gaussian it sees. Stage 2 renders the view after the deletion over such a window
-//! too (`ViewRenderer::render_within`).
+//! too (`ViewRenderer::render_within`), and the hull's redraws a window's tiles before and after
+//! the removal from one walk (`ViewRenderer::removal`).
 
 mod common;
 
 use cogeo::image_ops::Rect;
 use cogeo::removal::refine::{refine_window, seen_by_any, window_camera};
-use cogeo::removal::select::{DepthPlanes, ViewRenderer};
+use cogeo::removal::select::{select_gaussians, DepthPlanes, Rendered, ViewRenderer};
 use cogeo::render::{RenderSettings, SceneRenderer};
 use common::{random_scene, test_camera, SceneMix};
 
@@ -175,6 +176,66 @@ fn the_render_after_deletion_over_the_removed_gaussians_box_is_the_whole_render(
     let crop = |v: &[f32]| cogeo::image_ops::crop(v, w, h, 1, window);
     differ(&crop(&within.weight), &crop(&whole.weight));
     assert!(crop(&whole.weight).iter().filter(|&&x| x > 0.1).count() > 50, "no kept weight in the window");
+}
+
+/// The removal's renderer (`ViewRenderer::removal`) gives the view before and after the removal
+/// from one walk: each, bit for bit, what a renderer of its own scene gives (the removed
+/// Gaussians' weight before, the kept objects' after), whole and in a window's marked tiles from
+/// only the Gaussians that reach them, as the hull's redraws render them.
+#[test]
+fn the_removal_renderer_gives_both_scenes_renders_bit_for_bit() {
+    let gpu = common::gpu();
+    let scene = random_scene(21, 2, SceneMix::default());
+    let camera = test_camera(96, 72);
+    // a cluster of small Gaussians goes (label 1); those above the middle are a kept object (2)
+    let labels: Vec<u8> = (0..scene.len())
+        .map(|i| {
+            let m = scene.means[i];
+            let cluster = (m[0] - 0.6).hypot(m[1] - 0.3) < 0.6 && scene.log_scales[i].iter().all(|&s| s < -1.2);
+            if cluster {
+                1
+            } else {
+                2 * (m[1] < -0.3) as u8
+            }
+        })
+        .collect();
+    let selection = select_gaussians(&scene, &labels, &[1]).unwrap();
+    assert!(selection.count > 3 && selection.count < scene.len() / 3, "{} of {} removed", selection.count, scene.len());
+    let bg = [0.2f32, 0.4, 0.6];
+    let planes = DepthPlanes::Both;
+    let mut original = ViewRenderer::new(&gpu, &scene, Some(&selection.removed), planes).unwrap();
+    let mut after = ViewRenderer::new(&gpu, &selection.background, Some(&selection.kept_objects), planes).unwrap();
+    let mut both = ViewRenderer::removal(&gpu, &scene, &selection, planes).unwrap();
+    let same = |got: &Rendered, want: &Rendered, what: &str| {
+        for (plane, g, w) in [
+            ("rgb", &got.rgb, &want.rgb),
+            ("alpha", &got.alpha, &want.alpha),
+            ("depth", &got.depth, &want.depth),
+            ("median depth", &got.median, &want.median),
+            ("weight", &got.weight, &want.weight),
+        ] {
+            let differ = g.iter().zip(w.iter()).filter(|(p, q)| p.to_bits() != q.to_bits()).count();
+            assert!(g.len() == w.len() && differ == 0, "{what}, {plane}: {differ} values differ");
+        }
+    };
+    let (want_before, want_after) = (original.render(&camera, bg).unwrap(), after.render(&camera, bg).unwrap());
+    let changed = (0..96 * 72).filter(|&p| (want_before.alpha[p] - want_after.alpha[p]).abs() > 0.05).count();
+    assert!(changed > 50, "only {changed} pixels changed by the removal");
+    assert!(want_before.weight.iter().filter(|&&x| x > 0.1).count() > 50, "no removed weight");
+    assert!(want_after.weight.iter().filter(|&&x| x > 0.1).count() > 50, "no kept objects' weight");
+    let (before, after_removal) = both.render_window_tiles_both(&camera, bg, None).unwrap();
+    same(&before, &want_before, "whole view before");
+    same(&after_removal, &want_after, "whole view after");
+    // a window's marked tiles, twice (the second goes into the first one's buffers)
+    let window = window_camera(&camera, Rect { x0: 40, y0: 10, x1: 90, y1: 60 });
+    let tiles: Vec<bool> = (0..16).map(|t| t % 3 != 1).collect();
+    for _ in 0..2 {
+        let want_before = original.render_window_tiles(&window, bg, Some(tiles.clone())).unwrap();
+        let want_after = after.render_window_tiles(&window, bg, Some(tiles.clone())).unwrap();
+        let (before, after_removal) = both.render_window_tiles_both(&window, bg, Some(tiles.clone())).unwrap();
+        same(&before, &want_before, "window before");
+        same(&after_removal, &want_after, "window after");
+    }
 }
 
 /// The refinement moves the patch Gaussians (the last of the scene) and those whose centre lands

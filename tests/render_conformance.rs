@@ -286,3 +286,81 @@ fn only_the_marked_tiles_are_blended_with_the_whole_renders_bits() {
     let err = Rasterizer::new(&g).unwrap().render(&buffers, &cam, &wrong).unwrap_err();
     assert!(err.to_string().contains("18"), "{err}");
 }
+
+/// Fails on the first element where two planes differ in their bits, saying where and how many do.
+fn same_bits<T: Copy + PartialEq + std::fmt::Debug>(got: &[T], want: &[T], what: &str) {
+    assert_eq!(got.len(), want.len(), "{what}: plane sizes");
+    let differ: Vec<usize> = (0..got.len()).filter(|&i| got[i] != want[i]).collect();
+    if let Some(&i) = differ.first() {
+        panic!("{what}: {} elements differ, the first at {i}: {:?} against {:?}", differ.len(), got[i], want[i]);
+    }
+}
+
+#[test]
+fn the_render_after_removal_is_that_scenes_own_render_bit_for_bit() {
+    // RenderSettings::after_removal: one walk over the original's tile lists blends the scene less
+    // the removed Gaussians (feature 1) beside it, the kept objects' weight (feature 2) as its
+    // feature; each state must be, bit for bit, the render of its own scene with its own 0/1
+    // marker (the removal's masks read both), in every blend layout, whole or in marked tiles
+    let g = gpu();
+    let mixes = [SceneMix::default(), SceneMix { normal: 60, tiny: 0, huge: 2, behind: 5, faint: 10, opaque: 500 }];
+    let cam = test_camera(83, 37);
+    let hw = 83 * 37;
+    let (tiles_x, tiles_y) = (83usize.div_ceil(16), 37usize.div_ceil(16));
+    let marked: Vec<bool> = (0..tiles_x * tiles_y).map(|t| (t * 5) % 3 != 1).collect();
+    for (k, mix) in mixes.into_iter().enumerate() {
+        let scene = random_scene(151 + k as u64, 2, mix);
+        let removed: Vec<bool> = (0..scene.len()).map(|i| (i * 7 + k) % 3 == 0).collect();
+        let kept_object: Vec<bool> = (0..scene.len()).map(|i| !removed[i] && i % 5 == 1).collect();
+        let code: Vec<f32> =
+            (0..scene.len()).map(|i| if removed[i] { 1.0 } else { 2.0 * kept_object[i] as u8 as f32 }).collect();
+        let removed_marker: Vec<f32> = removed.iter().map(|&r| r as u8 as f32).collect();
+        let keep: Vec<bool> = removed.iter().map(|&r| !r).collect();
+        let after_scene = scene.subset(&keep);
+        let kept_marker: Vec<f32> =
+            (0..scene.len()).filter(|&i| keep[i]).map(|i| kept_object[i] as u8 as f32).collect();
+        let both = SceneBuffers::upload(&g, &scene, Some((&code, 1))).unwrap();
+        let original = SceneBuffers::upload(&g, &scene, Some((&removed_marker, 1))).unwrap();
+        let after = SceneBuffers::upload(&g, &after_scene, Some((&kept_marker, 1))).unwrap();
+        for only_tiles in [None, Some(marked.clone())] {
+            let settings = RenderSettings {
+                background: [0.2, 0.3, 0.4],
+                features: true,
+                median_depth: true,
+                only_tiles,
+                ..Default::default()
+            };
+            let mut raster = Rasterizer::new(&g).unwrap();
+            let want_before = raster.render(&original, &cam, &settings).unwrap();
+            let want_after = raster.render(&after, &cam, &settings).unwrap();
+            // the two scenes differ: the test can tell the states apart
+            let differ = (0..hw).filter(|&p| want_before.alpha[p] != want_after.alpha[p]).count();
+            assert!(differ > 200, "mix {k}: the removal changes only {differ} pixels");
+            assert!(want_before.features.iter().any(|&f| f > 0.5) && want_after.features.iter().any(|&f| f > 0.5));
+            let dual = RenderSettings { after_removal: true, ..settings.clone() };
+            for rows in [1, 4, 16] {
+                let layout = BlendLayout { forward_rows: rows, ..BlendLayout::PIXEL };
+                let out = Rasterizer::with_layout(&g, layout).unwrap().render(&both, &cam, &dual).unwrap();
+                let at = format!("mix {k}, {rows} rows, tiles {}", settings.only_tiles.is_some());
+                same_bits(&out.rgb, &want_before.rgb, &format!("{at}: color"));
+                same_bits(&out.alpha, &want_before.alpha, &format!("{at}: alpha"));
+                same_bits(&out.expected_depth, &want_before.expected_depth, &format!("{at}: depth"));
+                same_bits(&out.median_depth, &want_before.median_depth, &format!("{at}: median depth"));
+                same_bits(&out.n_contrib, &want_before.n_contrib, &format!("{at}: contributors"));
+                same_bits(&out.features, &want_before.features, &format!("{at}: removed weight"));
+                let a = out.after_removal.expect("rendered after removal");
+                same_bits(&a.rgb, &want_after.rgb, &format!("{at}: color after removal"));
+                same_bits(&a.alpha, &want_after.alpha, &format!("{at}: alpha after removal"));
+                same_bits(&a.expected_depth, &want_after.expected_depth, &format!("{at}: depth after removal"));
+                same_bits(&a.median_depth, &want_after.median_depth, &format!("{at}: median depth after removal"));
+                same_bits(&a.kept_weight, &want_after.features, &format!("{at}: kept objects' weight"));
+            }
+        }
+    }
+    // the states need the one feature that marks the removal
+    let scene = random_scene(157, 0, SceneMix::default());
+    let buffers = SceneBuffers::upload(&g, &scene, None).unwrap();
+    let wrong = RenderSettings { after_removal: true, ..Default::default() };
+    let err = Rasterizer::new(&g).unwrap().render(&buffers, &cam, &wrong).unwrap_err();
+    assert!(err.to_string().contains("after removal"), "{err}");
+}

@@ -182,6 +182,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         timestamps: a.timings,
         median_depth: false,
         only_tiles: None,
+        after_removal: false,
     };
     let batch = cogeo::io::OutputBatch::begin();
     render_views(&gpu, &scene, &cameras, &a.out, &settings, a.depth, a.alpha, a.timings)?;

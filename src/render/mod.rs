@@ -3,6 +3,7 @@
 //! (tile_ranges.comp), 16x16 tile alpha blending of RGB / alpha / depth (blend.comp) and N-dim
 //! features (blend_features.comp). `reference` is the dense f64 CPU twin the tests check against.
 
+mod after_removal;
 pub mod backward;
 mod blend_layout;
 mod features;
@@ -18,6 +19,8 @@ use crate::gpu::{dispatch_1d, Buffer, ComputePipeline, Gpu, MemoryKind, PassTimi
 use crate::scene::{Camera, MAX_SH_DEGREE};
 use crate::shaders;
 use crate::sort::{self, scan, RadixSort};
+pub use after_removal::AfterRemoval;
+use after_removal::AFTER_PLANES;
 use anyhow::{bail, Result};
 pub use blend_layout::BlendLayout;
 use features::FeaturePipelines;
@@ -49,6 +52,9 @@ pub struct RenderSettings {
     /// others come out empty (the background, alpha 0). For a forward render of which the caller
     /// reads a part: a tile's pixels are those of the whole render, bit for bit.
     pub only_tiles: Option<Vec<bool>>,
+    /// Also the scene less the Gaussians whose one feature is 1 (`RenderOutput::after_removal`):
+    /// the feature then marks the removal, 1 a removed Gaussian and 2 a kept object's (blend.comp).
+    pub after_removal: bool,
 }
 
 impl Default for RenderSettings {
@@ -61,6 +67,7 @@ impl Default for RenderSettings {
             timestamps: false,
             median_depth: false,
             only_tiles: None,
+            after_removal: false,
         }
     }
 }
@@ -87,6 +94,9 @@ pub struct RenderOutput {
     pub feature_dim: u32,
     pub num_intersections: u32,
     pub timings: Vec<PassTiming>,
+    /// With `RenderSettings::after_removal`, the scene less the removed Gaussians from the same
+    /// walk; its planes are, bit for bit, those a render of that scene alone gives.
+    pub after_removal: Option<AfterRemoval>,
 }
 
 /// What a forward pass leaves for the host: its parameter block (camera, sizes, buffer addresses)
@@ -97,6 +107,8 @@ pub struct Frame {
     pub num_intersections: u32,
     /// Whether the median depth was blended (`RenderSettings::median_depth`).
     pub median_depth: bool,
+    /// Whether the scene after removal was blended too (`RenderSettings::after_removal`).
+    pub after_removal: bool,
     pub timings: Vec<PassTiming>,
 }
 
@@ -146,6 +158,8 @@ struct ImageBuffers {
     features: Buffer,
     /// `RenderSettings::only_tiles`, one u32 per tile.
     tile_mask: Buffer,
+    /// `RenderSettings::after_removal`'s planes, made on first use.
+    after: Option<Buffer>,
 }
 
 /// Owner of the forward-pass pipelines and their working memory.
@@ -279,6 +293,7 @@ impl Rasterizer {
             n_contrib: buf("out_n_contrib", hw)?,
             features: buf("out_features", feature_dim.max(1) as u64 * hw)?,
             tile_mask: Buffer::new(g, "tile_mask", tiles * 4, MemoryKind::Upload)?,
+            after: None,
         });
         Ok(())
     }
@@ -319,8 +334,18 @@ impl Rasterizer {
         if settings.features && scene.features.is_none() {
             bail!("features requested but the scene has none");
         }
+        if settings.after_removal && feature_dim != 1 {
+            bail!("the render after removal needs the one feature that marks the removal, not {feature_dim}");
+        }
         self.reserve_gaussians(n)?;
         self.reserve_image(width, height, feature_dim)?;
+        if settings.after_removal {
+            let image = self.image.as_mut().unwrap();
+            if image.after.is_none() {
+                let size = AFTER_PLANES * 4 * width as u64 * height as u64;
+                image.after = Some(Buffer::new(&self.gpu, "out_after", size, MemoryKind::Device)?);
+            }
+        }
         // (one feature blends in blend.comp: no feature pipeline to build)
         self.blend_features.prepare(&self.gpu, if feature_dim == 1 { 0 } else { feature_dim })?;
         let tiles_x = width.div_ceil(TILE);
@@ -399,7 +424,8 @@ impl Rasterizer {
         let one_feature = feature_dim == 1;
         if one_feature || settings.median_depth {
             let rows = self.blend_rows;
-            let constants = [rows, 16 / rows, one_feature as u32, settings.median_depth as u32];
+            let (median, after) = (settings.median_depth as u32, settings.after_removal as u32);
+            let constants = [rows, 16 / rows, one_feature as u32, median, after];
             rec.dispatch(self.blend_variants.get(&self.gpu, &constants)?, &push, dispatch_1d(num_tiles));
         } else {
             rec.dispatch(&self.blend, &push, dispatch_1d(num_tiles));
@@ -412,7 +438,8 @@ impl Rasterizer {
             }
             rec.mark("blend features");
         }
-        Ok((Frame { params, num_intersections: m, median_depth: settings.median_depth, timings }, rec))
+        let after_removal = settings.after_removal;
+        Ok((Frame { params, num_intersections: m, median_depth: settings.median_depth, after_removal, timings }, rec))
     }
 
     /// Reads the outputs back through a staging buffer even where the device memory is mapped: a
@@ -431,7 +458,9 @@ impl Rasterizer {
         let mut median_depth = vec![0f32; if frame.median_depth { hw } else { 0 }];
         let mut features = vec![0f32; feature_dim as usize * hw];
         let mut n_contrib = vec![0u32; hw];
+        let mut after = vec![0f32; if frame.after_removal { AFTER_PLANES as usize * hw } else { 0 }];
         use bytemuck::cast_slice_mut as bytes;
+        let after_buffer = image.after.as_ref().unwrap_or(&image.features);
         self.readback.read_into(
             &self.gpu,
             &mut [
@@ -443,8 +472,10 @@ impl Rasterizer {
                 (&image.final_t, 0, bytes(&mut final_t)),
                 (&image.n_contrib, 0, bytes(&mut n_contrib)),
                 (&image.features, 0, bytes(&mut features)),
+                (after_buffer, 0, bytes(&mut after)),
             ],
         )?;
+        let after_removal = frame.after_removal.then(|| AfterRemoval::from_planes(&after, hw, frame.median_depth));
         Ok(RenderOutput {
             width,
             height,
@@ -459,6 +490,7 @@ impl Rasterizer {
             feature_dim,
             num_intersections: frame.num_intersections,
             timings: frame.timings.clone(),
+            after_removal,
         })
     }
 
@@ -557,6 +589,7 @@ impl Rasterizer {
             tile_mask: 0,
             only_tiles: 0,
             pad1: 0,
+            out_after: im.after.as_ref().map_or(0, |b| b.address()),
         }
     }
 }

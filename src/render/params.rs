@@ -57,6 +57,8 @@ pub struct RenderParams {
     pub tile_mask: u64,
     pub only_tiles: u32,
     pub pad1: u32,
+    /// Written only by blend.comp's AFTER_REMOVAL variant: the 7 planes of `AfterRemoval`.
+    pub out_after: u64,
 }
 
 /// Push constants of most render passes: just the address of the parameter block.

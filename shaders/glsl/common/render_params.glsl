@@ -50,6 +50,8 @@ layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer Ren
     Uints tile_mask;       // tiles
     uint only_tiles;
     uint pad1;
+    // blend.comp's AFTER_REMOVAL variant: the scene less the removed Gaussians, 7 planes
+    Floats out_after;
 };
 
 // The range of intersections the blends composite for `tile`: empty for a tile the mask leaves out.

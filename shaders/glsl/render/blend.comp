@@ -11,6 +11,13 @@
 // With ONE_FEATURE = 1 (a scene with one feature per Gaussian, such as the removal's marker of the
 // removed Gaussians) the feature is blended here too, with the very sums of blend_features.comp,
 // instead of a second walk over the tile lists (on lavapipe that walk was 40 % of a render).
+// With AFTER_REMOVAL = 1 (and ONE_FEATURE = 1) the feature marks the removal: 1 a removed Gaussian,
+// 2 a kept object's, 0 the background. The walk then also blends the scene less the removed
+// Gaussians, into out_after, with the very decisions a render of that scene alone makes (its tile
+// lists are these less the removed Gaussians, in the same order): the hull's redraws need both
+// renders of a view's tiles, and the one walk spares the second scene's projection, sorts and
+// walk. The original's feature plane is then the removed Gaussians' weight, the after-removal one
+// the kept objects'.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_vote : require
 #extension GL_KHR_shader_subgroup_ballot : require
@@ -22,6 +29,7 @@ layout(constant_id = 0) const uint ROWS = 1;
 layout(constant_id = 1) const uint GROUP_HEIGHT = 16;
 layout(constant_id = 2) const uint ONE_FEATURE = 0;
 layout(constant_id = 3) const uint MEDIAN_DEPTH = 0;
+layout(constant_id = 4) const uint AFTER_REMOVAL = 0;
 layout(local_size_x = 16, local_size_y_id = 1) in;
 layout(push_constant) uniform Push { RenderParams p; };
 
@@ -37,6 +45,11 @@ void main() {
     vec3 C[ROWS];
     uint n_contrib[ROWS];
     bool finished[ROWS];
+    // the scene after removal (AFTER_REMOVAL): transmittance, color, depth sum, weight sum, kept
+    // objects' weight, median depth
+    float T2[ROWS], D2[ROWS], W2[ROWS], F2[ROWS], M2[ROWS];
+    vec3 C2[ROWS];
+    bool finished2[ROWS];
     bool lane_finished = true;  // every owned pixel finished
     for (uint r = 0; r < ROWS; r++) {
         uvec2 pix = uvec2(tx * TILE + gl_LocalInvocationID.x, ty * TILE + gl_LocalInvocationID.y * ROWS + r);
@@ -50,6 +63,15 @@ void main() {
         n_contrib[r] = start;
         finished[r] = !(pix.x < p.width && pix.y < p.height);
         lane_finished = lane_finished && finished[r];
+        if (AFTER_REMOVAL != 0) {
+            T2[r] = 1.0;
+            C2[r] = vec3(0.0);
+            D2[r] = 0.0;
+            W2[r] = 0.0;
+            F2[r] = 0.0;
+            M2[r] = -1.0;
+            finished2[r] = finished[r];
+        }
     }
 
     // Each subgroup walks the list on its own, a subgroup's worth of Gaussians at a time: lane l
@@ -82,18 +104,52 @@ void main() {
             lane_finished = true;
             for (uint r = 0; r < ROWS; r++) {
                 // the rows of a subgroup's lanes are the same on a CPU driver, so this skip is uniform there
-                if (!finished[r] && abs(pixel[r].y - xy.y) <= reach) {
-                    float w = blend_weight(pixel[r], xy, co, T[r], finished[r]);
-                    if (w > 0.0) {
-                        C[r] += w * cd.rgb;
-                        D[r] += w * cd.w;
-                        W[r] += w;
-                        if (ONE_FEATURE != 0) F[r] += w * f;
-                        if (MEDIAN_DEPTH != 0 && M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
-                        n_contrib[r] = batch + j + 1;
+                bool in_reach = abs(pixel[r].y - xy.y) <= reach;
+                if (AFTER_REMOVAL == 0) {
+                    if (!finished[r] && in_reach) {
+                        float w = blend_weight(pixel[r], xy, co, T[r], finished[r]);
+                        if (w > 0.0) {
+                            C[r] += w * cd.rgb;
+                            D[r] += w * cd.w;
+                            W[r] += w;
+                            if (ONE_FEATURE != 0) F[r] += w * f;
+                            if (MEDIAN_DEPTH != 0 && M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
+                            n_contrib[r] = batch + j + 1;
+                        }
+                    }
+                    lane_finished = lane_finished && finished[r];
+                    continue;
+                }
+                // both states, one alpha: the removed Gaussians (feature 1) blend in the original only.
+                // (Keeping one state until a removed Gaussian first blends at the pixel, and the
+                // second only from there, was slower on lavapipe, whose lanes take both branches:
+                // the hull's redraws of the statue `images_2` 4.2 -> 5.2-5.5 s.)
+                bool after_blends = f != 1.0 && !finished2[r];
+                if (in_reach && (!finished[r] || after_blends)) {
+                    float alpha = gaussian_alpha(pixel[r], xy, co);
+                    if (!finished[r]) {
+                        float w = take_weight(alpha, T[r], finished[r]);
+                        if (w > 0.0) {
+                            C[r] += w * cd.rgb;
+                            D[r] += w * cd.w;
+                            W[r] += w;
+                            if (f == 1.0) F[r] += w;
+                            if (MEDIAN_DEPTH != 0 && M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
+                            n_contrib[r] = batch + j + 1;
+                        }
+                    }
+                    if (after_blends) {
+                        float w = take_weight(alpha, T2[r], finished2[r]);
+                        if (w > 0.0) {
+                            C2[r] += w * cd.rgb;
+                            D2[r] += w * cd.w;
+                            W2[r] += w;
+                            if (f == 2.0) F2[r] += w;
+                            if (MEDIAN_DEPTH != 0 && M2[r] < 0.0 && T2[r] <= 0.5) M2[r] = cd.w;
+                        }
                     }
                 }
-                lane_finished = lane_finished && finished[r];
+                lane_finished = lane_finished && finished[r] && finished2[r];
             }
         }
     }
@@ -116,5 +172,17 @@ void main() {
         p.out_final_t.v[pi] = T[r];
         p.out_n_contrib.v[pi] = n_contrib[r];
         if (ONE_FEATURE != 0) p.out_features.v[pi] = F[r];
+        if (AFTER_REMOVAL != 0) {
+            // planes: R, G, B, alpha, expected depth, median depth, kept objects' weight
+            vec3 rgb2 = C2[r] + T2[r] * vec3(p.background[0], p.background[1], p.background[2]);
+            float expected2 = D2[r] / max(W2[r], 1e-10);
+            p.out_after.v[pi] = rgb2.r;
+            p.out_after.v[hw + pi] = rgb2.g;
+            p.out_after.v[2 * hw + pi] = rgb2.b;
+            p.out_after.v[3 * hw + pi] = 1.0 - T2[r];
+            p.out_after.v[4 * hw + pi] = expected2;
+            if (MEDIAN_DEPTH != 0) p.out_after.v[5 * hw + pi] = M2[r] >= 0.0 ? M2[r] : D2[r] / max(W2[r], 1e-10);
+            p.out_after.v[6 * hw + pi] = F2[r];
+        }
     }
 }

@@ -3,9 +3,9 @@
 
 const float POWER_SKIP = -5.6;
 
-// Returns the blending weight alpha * T of one Gaussian at one pixel and advances T, or 0 when the
-// Gaussian is skipped. Sets `finished` when T would fall below T_MIN (that Gaussian is not blended).
-float blend_weight(vec2 pixel, vec2 xy, vec4 conic_opacity, inout float T, inout bool finished) {
+// The alpha of one Gaussian at one pixel, or 0 where it is skipped: the part of blend_weight that
+// does not depend on the transmittance, so that blend.comp's two states (AFTER_REMOVAL) share it.
+float gaussian_alpha(vec2 pixel, vec2 xy, vec4 conic_opacity) {
     vec2 d = xy - pixel;
     float power = -0.5 * (conic_opacity.x * d.x * d.x + conic_opacity.z * d.y * d.y) - conic_opacity.y * d.x * d.y;
     if (power > 0.0) return 0.0;
@@ -14,7 +14,13 @@ float blend_weight(vec2 pixel, vec2 xy, vec4 conic_opacity, inout float T, inout
     // which are very slow on CPUs (lavapipe) that do not flush them to zero.
     if (power < POWER_SKIP) return 0.0;
     float alpha = min(ALPHA_MAX, conic_opacity.w * exp(power));
-    if (alpha < ALPHA_MIN) return 0.0;
+    return alpha < ALPHA_MIN ? 0.0 : alpha;
+}
+
+// The blending weight alpha * T of a Gaussian of `alpha` (gaussian_alpha) and advances T, or 0 when
+// it is skipped. Sets `finished` when T would fall below T_MIN (that Gaussian is not blended).
+float take_weight(float alpha, inout float T, inout bool finished) {
+    if (alpha == 0.0) return 0.0;
     float t_next = T * (1.0 - alpha);
     if (t_next < T_MIN) {
         finished = true;
@@ -23,6 +29,12 @@ float blend_weight(vec2 pixel, vec2 xy, vec4 conic_opacity, inout float T, inout
     float w = alpha * T;
     T = t_next;
     return w;
+}
+
+// Returns the blending weight alpha * T of one Gaussian at one pixel and advances T, or 0 when the
+// Gaussian is skipped. Sets `finished` when T would fall below T_MIN (that Gaussian is not blended).
+float blend_weight(vec2 pixel, vec2 xy, vec4 conic_opacity, inout float T, inout bool finished) {
+    return take_weight(gaussian_alpha(pixel, xy, conic_opacity), T, finished);
 }
 
 // How far (in pixels, vertically) from its center a Gaussian can still pass blend_weight's tests: for
