@@ -301,7 +301,8 @@ fn the_render_after_removal_is_that_scenes_own_render_bit_for_bit() {
     // RenderSettings::after_removal: one walk over the original's tile lists blends the scene less
     // the removed Gaussians (feature 1) beside it, the kept objects' weight (feature 2) as its
     // feature; each state must be, bit for bit, the render of its own scene with its own 0/1
-    // marker (the removal's masks read both), in every blend layout, whole or in marked tiles
+    // marker (the hull's redraws read both), in every blend layout, whole or in marked tiles, read
+    // back directly or through a staging buffer
     let g = gpu();
     let mixes = [SceneMix::default(), SceneMix { normal: 60, tiny: 0, huge: 2, behind: 5, faint: 10, opaque: 500 }];
     let cam = test_camera(83, 37);
@@ -338,10 +339,13 @@ fn the_render_after_removal_is_that_scenes_own_render_bit_for_bit() {
             assert!(differ > 200, "mix {k}: the removal changes only {differ} pixels");
             assert!(want_before.features.iter().any(|&f| f > 0.5) && want_after.features.iter().any(|&f| f > 0.5));
             let dual = RenderSettings { after_removal: true, ..settings.clone() };
-            for rows in [1, 4, 16] {
+            // the last through a staging buffer, as a discrete GPU reads the planes back
+            for (rows, staged) in [(1, false), (4, false), (16, false), (16, true)] {
                 let layout = BlendLayout { forward_rows: rows, ..BlendLayout::PIXEL };
-                let out = Rasterizer::with_layout(&g, layout).unwrap().render(&both, &cam, &dual).unwrap();
-                let at = format!("mix {k}, {rows} rows, tiles {}", settings.only_tiles.is_some());
+                let mut raster = Rasterizer::with_layout(&g, layout).unwrap();
+                raster.stage_readbacks(staged);
+                let out = raster.render(&both, &cam, &dual).unwrap();
+                let at = format!("mix {k}, {rows} rows, staged {staged}, tiles {}", settings.only_tiles.is_some());
                 same_bits(&out.rgb, &want_before.rgb, &format!("{at}: color"));
                 same_bits(&out.alpha, &want_before.alpha, &format!("{at}: alpha"));
                 same_bits(&out.expected_depth, &want_before.expected_depth, &format!("{at}: depth"));
