@@ -460,6 +460,7 @@ impl Rasterizer {
         let mut n_contrib = vec![0u32; hw];
         let mut after = vec![0f32; if frame.after_removal { AFTER_PLANES as usize * hw } else { 0 }];
         use bytemuck::cast_slice_mut as bytes;
+        // without the render after removal its part is empty, and any buffer serves for no bytes
         let after_buffer = image.after.as_ref().unwrap_or(&image.features);
         self.readback.read_into(
             &self.gpu,

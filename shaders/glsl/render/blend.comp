@@ -105,26 +105,12 @@ void main() {
             for (uint r = 0; r < ROWS; r++) {
                 // the rows of a subgroup's lanes are the same on a CPU driver, so this skip is uniform there
                 bool in_reach = abs(pixel[r].y - xy.y) <= reach;
-                if (AFTER_REMOVAL == 0) {
-                    if (!finished[r] && in_reach) {
-                        float w = blend_weight(pixel[r], xy, co, T[r], finished[r]);
-                        if (w > 0.0) {
-                            C[r] += w * cd.rgb;
-                            D[r] += w * cd.w;
-                            W[r] += w;
-                            if (ONE_FEATURE != 0) F[r] += w * f;
-                            if (MEDIAN_DEPTH != 0 && M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
-                            n_contrib[r] = batch + j + 1;
-                        }
-                    }
-                    lane_finished = lane_finished && finished[r];
-                    continue;
-                }
-                // both states, one alpha: the removed Gaussians (feature 1) blend in the original only.
-                // (Keeping one state until a removed Gaussian first blends at the pixel, and the
-                // second only from there, was slower on lavapipe, whose lanes take both branches:
-                // the hull's redraws of the statue `images_2` 4.2 -> 5.2-5.5 s.)
-                bool after_blends = f != 1.0 && !finished2[r];
+                // With AFTER_REMOVAL both states take the one alpha, and the removed Gaussians
+                // (feature 1) blend in the original only. (Keeping one state until a removed
+                // Gaussian first blends at the pixel, and the second only from there, was slower on
+                // lavapipe, whose lanes take both branches: the hull's redraws of the statue
+                // `images_2` 4.2 -> 5.2-5.5 s.)
+                bool after_blends = AFTER_REMOVAL != 0 && f != 1.0 && !finished2[r];
                 if (in_reach && (!finished[r] || after_blends)) {
                     float alpha = gaussian_alpha(pixel[r], xy, co);
                     if (!finished[r]) {
@@ -133,7 +119,7 @@ void main() {
                             C[r] += w * cd.rgb;
                             D[r] += w * cd.w;
                             W[r] += w;
-                            if (f == 1.0) F[r] += w;
+                            if (ONE_FEATURE != 0) F[r] += AFTER_REMOVAL != 0 ? (f == 1.0 ? w : 0.0) : w * f;
                             if (MEDIAN_DEPTH != 0 && M[r] < 0.0 && T[r] <= 0.5) M[r] = cd.w;
                             n_contrib[r] = batch + j + 1;
                         }
@@ -149,7 +135,7 @@ void main() {
                         }
                     }
                 }
-                lane_finished = lane_finished && finished[r] && finished2[r];
+                lane_finished = lane_finished && finished[r] && (AFTER_REMOVAL == 0 || finished2[r]);
             }
         }
     }
