@@ -289,7 +289,7 @@ fn run_does_train_tag_and_remove_in_one_command() {
     let data = path("data");
     run_cogeo(exe, &["synth", "--out", &data, "--width", "32", "--height", "24", "--views", "8", "--objects", "2"]);
     let out = path("run");
-    run_cogeo(
+    let stderr = run_cogeo(
         exe,
         &[
             "run",
@@ -311,6 +311,11 @@ fn run_does_train_tag_and_remove_in_one_command() {
             "10",
         ],
     );
+    // stderr is a pipe here, not a terminal: the removal's stages show as plain lines, in order
+    let stage_line =
+        |stage: &str| stderr.find(&format!("remove: {stage} ")).unwrap_or_else(|| panic!("no {stage} line:\n{stderr}"));
+    let order: Vec<usize> = ["masks", "complete", "refine", "render"].iter().map(|s| stage_line(s)).collect();
+    assert!(order.windows(2).all(|p| p[0] < p[1]), "stages out of order:\n{stderr}");
     assert!(root.join("run/train/scene.ply").is_file());
     assert!(root.join("run/tagged.ply").is_file() && root.join("run/tagged.json").is_file());
     let r = report(&path("run/removal"));

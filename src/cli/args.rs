@@ -51,22 +51,57 @@ impl DeviceArgs {
 
 pub use cogeo::flag_values::parse_rgb;
 
-/// One bar for a run of named stages: `set_stage` shows each stage's name and its items done.
-pub fn stage_progress() -> ProgressBar {
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{msg:>9} [{bar:30}] {pos}/{len} {elapsed_precise}")
-            .unwrap()
-            .progress_chars("=> "),
-    );
-    bar
+/// Seconds between the plain lines of one long stage without a terminal (`StageProgress`).
+const PLAIN_EVERY_SECONDS: f64 = 10.0;
+
+/// Progress through a run of named stages (`remove`'s, `synth --composite-into`'s): one bar showing
+/// each stage's name and its items done. Without a terminal (a pipe, a log file, a batch job) the
+/// bar draws nothing, so a plain line is printed instead when a stage starts and about every
+/// `PLAIN_EVERY_SECONDS` within one (a removal on a large capture spends minutes in one stage).
+pub struct StageProgress {
+    bar: ProgressBar,
+    /// The command's name, each plain line's first word; None on a terminal.
+    plain: Option<&'static str>,
+    start: std::time::Instant,
+    /// The stage of the last plain line and when it was printed (a cell: `synth`'s callback is a
+    /// `Fn`).
+    last: std::cell::RefCell<Option<(String, f64)>>,
 }
 
-/// Shows `done` of `total` items of `stage` on a `stage_progress` bar.
-pub fn set_stage(bar: &ProgressBar, stage: &str, done: usize, total: usize) {
-    bar.set_message(stage.to_string());
-    bar.set_length(total as u64);
-    bar.set_position(done as u64);
+impl StageProgress {
+    pub fn new(command: &'static str) -> StageProgress {
+        use std::io::IsTerminal;
+        let bar = ProgressBar::new(0);
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>9} [{bar:30}] {pos}/{len} {elapsed_precise}")
+                .unwrap()
+                .progress_chars("=> "),
+        );
+        let plain = (!std::io::stderr().is_terminal()).then_some(command);
+        StageProgress { bar, plain, start: std::time::Instant::now(), last: Default::default() }
+    }
+
+    /// `done` of `total` items of `stage`.
+    pub fn set(&self, stage: &str, done: usize, total: usize) {
+        self.bar.set_message(stage.to_string());
+        self.bar.set_length(total as u64);
+        self.bar.set_position(done as u64);
+        let Some(command) = self.plain else { return };
+        let now = self.start.elapsed().as_secs_f64();
+        let mut last = self.last.borrow_mut();
+        let due = match &*last {
+            Some((last, at)) => last != stage || now - at >= PLAIN_EVERY_SECONDS,
+            None => true,
+        };
+        if due {
+            eprintln!("{command}: {stage} {done}/{total} at {now:.1} s");
+            *last = Some((stage.to_string(), now));
+        }
+    }
+
+    pub fn finish(self) {
+        self.bar.finish_and_clear();
+    }
 }
 
 pub fn progress(len: usize, what: &str) -> ProgressBar {

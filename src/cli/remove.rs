@@ -231,7 +231,7 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         gpu.info().name
     );
     let cameras: Vec<Camera> = data.train.iter().map(|v| v.camera.clone()).collect();
-    let bar = super::args::stage_progress();
+    let stages = super::args::StageProgress::new("remove");
     let start = std::time::Instant::now();
     let removal = cogeo::removal::remove(
         &gpu,
@@ -242,9 +242,9 @@ pub fn run(a: RemoveArgs) -> Result<()> {
         data.extent,
         &opts,
         &completer,
-        &mut |stage, done, total| super::args::set_stage(&bar, stage, done, total),
+        &mut |stage, done, total| stages.set(stage, done, total),
     )?;
-    bar.finish_and_clear();
+    stages.finish();
     // outputs: the edited views are encoded and written on other threads while the GPU renders
     // the held-out views
     let out = &a.out;

@@ -1,6 +1,6 @@
 //! `cogeo synth`: a procedural dataset with exact removal ground truth.
 
-use super::args::{open_gpu, progress, set_stage, stage_progress, DeviceArgs};
+use super::args::{open_gpu, progress, DeviceArgs, StageProgress};
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -155,11 +155,10 @@ fn composite(a: &SynthArgs, capture: &std::path::Path) -> Result<()> {
         placement: a.placement.clone(),
     };
     let gpu = open_gpu(&a.device)?;
-    let bar = stage_progress();
-    let summary = cogeo::synth::composite::composite(&gpu, &cfg, &a.out, &|stage, done, total| {
-        set_stage(&bar, stage, done, total)
-    })?;
-    bar.finish_and_clear();
+    let stages = StageProgress::new("synth");
+    let summary =
+        cogeo::synth::composite::composite(&gpu, &cfg, &a.out, &|stage, done, total| stages.set(stage, done, total))?;
+    stages.finish();
     eprintln!(
         "composited {} objects into {} views of {} ({} views with one object partly behind another; {} capture \
          points left out, hidden by the objects) into {}",
