@@ -232,7 +232,7 @@ fn tag_methods_on_a_trained_synth_scene_reach_miou() {
     let mut miou = std::collections::HashMap::new();
     for method in ["vote", "project", "distill"] {
         let out = path(&format!("{method}.ply"));
-        run(&[
+        let stderr = run(&[
             "tag",
             "--scene",
             &scene,
@@ -247,6 +247,8 @@ fn tag_methods_on_a_trained_synth_scene_reach_miou() {
             "--iters",
             "150",
         ]);
+        // stderr is a pipe: the distillation's progress shows as plain lines, every 5 %
+        assert_eq!(stderr.contains("tag 7/150 "), method == "distill", "{method}:\n{stderr}");
         let report: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{method}.json"))).unwrap()).unwrap();
         let m = report["held_out"]["miou"].as_f64().unwrap();

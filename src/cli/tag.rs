@@ -5,6 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use cogeo::scene::{ply, Camera};
 use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 #[derive(Args)]
@@ -129,10 +130,18 @@ pub fn run(a: TagArgs) -> Result<()> {
     );
     let start = std::time::Instant::now();
     let cameras: Vec<Camera> = train_cams.iter().map(|c| (*c).clone()).collect();
+    // without a terminal (a pipe, a log file, a batch job) the bar draws nothing: a plain line
+    // about every 5 % of the distillation instead, as `train` prints
+    let iters = bar.length().unwrap_or(0);
+    let plain_every = (!std::io::stderr().is_terminal() && iters > 0).then(|| (iters / 20).max(1));
     let tagged = tag::tag_scene(&gpu, &scene, &cameras, &maps, opts, |it, losses| {
         bar.set_position(it as u64);
         if let Some((o, s)) = losses {
             bar.set_message(format!("L_obj {o:.4} L_space {s:.5}"));
+        }
+        if plain_every.is_some_and(|n| (it as u64).is_multiple_of(n)) {
+            let losses = losses.map(|(o, s)| format!(" L_obj {o:.4} L_space {s:.5}")).unwrap_or_default();
+            eprintln!("tag {it}/{iters} {:.0} s{losses}", start.elapsed().as_secs_f64());
         }
     })?;
     bar.finish_and_clear();
