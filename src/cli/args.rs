@@ -90,7 +90,7 @@ impl StageProgress {
         let now = self.start.elapsed().as_secs_f64();
         let mut last = self.last.borrow_mut();
         let due = match &*last {
-            Some((last, at)) => last != stage || now - at >= PLAIN_EVERY_SECONDS,
+            Some((shown, at)) => shown != stage || now - at >= PLAIN_EVERY_SECONDS,
             None => true,
         };
         if due {
