@@ -122,7 +122,8 @@ pub fn run(a: TagArgs) -> Result<()> {
         masks.display()
     );
     let gpu = open_gpu(&a.device)?;
-    let bar = ProgressBar::new(if opts.method == Method::Distill { opts.distill.iters as u64 } else { 0 });
+    let iters = if opts.method == Method::Distill { opts.distill.iters as u64 } else { 0 };
+    let bar = ProgressBar::new(iters);
     bar.set_style(
         ProgressStyle::with_template("tag [{bar:30}] {pos}/{len} {elapsed_precise} eta {eta} {msg}")
             .unwrap()
@@ -132,7 +133,6 @@ pub fn run(a: TagArgs) -> Result<()> {
     let cameras: Vec<Camera> = train_cams.iter().map(|c| (*c).clone()).collect();
     // without a terminal (a pipe, a log file, a batch job) the bar draws nothing: a plain line
     // about every 5 % of the distillation instead, as `train` prints
-    let iters = bar.length().unwrap_or(0);
     let plain_every = (!std::io::stderr().is_terminal() && iters > 0).then(|| (iters / 20).max(1));
     let tagged = tag::tag_scene(&gpu, &scene, &cameras, &maps, opts, |it, losses| {
         bar.set_position(it as u64);
