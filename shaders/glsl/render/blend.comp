@@ -167,7 +167,7 @@ void main() {
             p.out_after.v[2 * hw + pi] = rgb2.b;
             p.out_after.v[3 * hw + pi] = 1.0 - T2[r];
             p.out_after.v[4 * hw + pi] = expected2;
-            if (MEDIAN_DEPTH != 0) p.out_after.v[5 * hw + pi] = M2[r] >= 0.0 ? M2[r] : D2[r] / max(W2[r], 1e-10);
+            if (MEDIAN_DEPTH != 0) p.out_after.v[5 * hw + pi] = M2[r] >= 0.0 ? M2[r] : expected2;
             p.out_after.v[6 * hw + pi] = F2[r];
         }
     }
